@@ -1,0 +1,39 @@
+"""armfleet: several robot arms in one PyBullet world, each in its own namespace.
+
+>>> import armfleet
+>>> world = armfleet.World()
+>>> bob = world.spawn("bob", model="panda", at=(0, 0))
+"""
+
+from armfleet.arm import Arm
+from armfleet.bus import Bus
+from armfleet.errors import ArmfleetError
+from armfleet.messages import (
+    BringupEvent,
+    BringupStage,
+    ControllerState,
+    JointCommand,
+    JointState,
+    TFMessage,
+    TransformStamped,
+)
+from armfleet.spawn_pose import SpawnPose
+from armfleet.world import World
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Arm",
+    "ArmfleetError",
+    "BringupEvent",
+    "BringupStage",
+    "Bus",
+    "ControllerState",
+    "JointCommand",
+    "JointState",
+    "SpawnPose",
+    "TFMessage",
+    "TransformStamped",
+    "World",
+    "__version__",
+]

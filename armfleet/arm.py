@@ -1,0 +1,106 @@
+"""The handle users hold for one arm of a world."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from armfleet.arm_body import ArmBody
+from armfleet.bus import Bus
+from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
+from armfleet.description import ArmDescription
+from armfleet.kinematics import ArmKinematics
+from armfleet.messages import FloatArray, JointCommand, JointState
+from armfleet.robot_state_publisher import RobotStatePublisher
+from armfleet.spawn_pose import SpawnPose
+
+
+class Arm:
+    """One arm: its body, model, controllers and namespace ``/<name>``.
+
+    Created by :meth:`armfleet.World.spawn`; not meant to be built by hand.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        pose: SpawnPose,
+        description: ArmDescription,
+        body: ArmBody,
+        kinematics: ArmKinematics,
+        bus: Bus,
+        controller_manager: ControllerManager,
+        broadcaster: JointStateBroadcaster,
+        position_controller: PositionController,
+        state_publisher: RobotStatePublisher,
+    ) -> None:
+        self._name = name
+        self._pose = pose
+        self.description = description
+        self.body = body
+        self.kinematics = kinematics
+        self._bus = bus
+        self.controller_manager = controller_manager
+        self.broadcaster = broadcaster
+        self.position_controller = position_controller
+        self.state_publisher = state_publisher
+
+    @property
+    def name(self) -> str:
+        return self._name
+
+    @property
+    def namespace(self) -> str:
+        return f"/{self._name}"
+
+    @property
+    def model(self) -> str:
+        return self.description.model
+
+    @property
+    def pose(self) -> SpawnPose:
+        """Spawn pose of ``<name>_base_link`` in the world."""
+        return self._pose
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Prefixed names of the joints :meth:`move_to` controls, base to tool."""
+        return self.position_controller.joint_names
+
+    @property
+    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
+        """(lower, upper) position limits of :attr:`joint_names` [rad or m]."""
+        return self.position_controller.lower.copy(), self.position_controller.upper.copy()
+
+    @property
+    def joint_state(self) -> JointState:
+        """The latest message of ``/<name>/joint_states`` (every movable joint)."""
+        latest = self.broadcaster.latest
+        assert latest is not None  # bring-up waits for the first message
+        return latest
+
+    @property
+    def positions(self) -> FloatArray:
+        """Current positions of :attr:`joint_names`, read at the last step."""
+        return self.body.position[self.kinematics.arm_indices].copy()
+
+    @property
+    def is_moving(self) -> bool:
+        """Whether the position controller's reference is still in motion."""
+        return self.position_controller.is_moving
+
+    def move_to(self, positions: Sequence[float]) -> None:
+        """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
+
+        The command goes out on ``/<name>/position_controller/commands``.
+
+        Raises:
+            TargetLengthError, NonFiniteTarget, JointLimitError: nothing is sent.
+        """
+        values = self.position_controller.validate(positions)
+        self._bus.publish(
+            f"{self.namespace}/position_controller/commands",
+            JointCommand(tuple(float(v) for v in values)),
+        )
+
+    def __repr__(self) -> str:
+        return f"Arm({self._name!r}, model={self.model!r}, pose={self._pose})"

@@ -1,0 +1,132 @@
+"""An arm's body in the PyBullet world: its joints' state and effort interfaces.
+
+This is the arm's hardware interface in ros2_control terms: ``read()`` fills
+the state (positions, velocities), controllers fill ``effort_command``, and
+``write()`` sends it to the physics engine in torque mode.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Sequence
+
+import numpy as np
+import pybullet as p
+
+from armfleet.errors import DescriptionError
+from armfleet.messages import FloatArray
+
+#: Load flags: inertias from the file (so PyBullet and Pinocchio dynamics
+#: agree) and no visual shapes (PyBullet renders nothing here; the viewer
+#: takes visuals from Pinocchio).
+LOAD_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_IGNORE_VISUAL_SHAPES
+_BRAKE_FORCE = 1e4
+
+
+class ArmBody:
+    """The PyBullet multibody of one arm.
+
+    Args:
+        client: PyBullet physics client id of the world.
+        urdf: URDF text (absolute mesh paths), loaded at the world origin; its
+            ``world`` joint carries the spawn pose.
+        joint_names: movable joints, in the order of every array here.
+    """
+
+    def __init__(self, client: int, urdf: str, joint_names: Sequence[str]) -> None:
+        self._client = client
+        fd, path = tempfile.mkstemp(suffix=".urdf", prefix="armfleet-")
+        try:
+            with os.fdopen(fd, "w") as file:
+                file.write(urdf)
+            self.body_id = p.loadURDF(
+                path, useFixedBase=True, flags=LOAD_FLAGS, physicsClientId=client
+            )
+        except p.error as exc:
+            raise DescriptionError(f"PyBullet cannot load the URDF: {exc}") from exc
+        finally:
+            os.unlink(path)
+        self._link_index: dict[str, int] = {}
+        joint_index: dict[str, int] = {}
+        for index in range(p.getNumJoints(self.body_id, physicsClientId=client)):
+            info = p.getJointInfo(self.body_id, index, physicsClientId=client)
+            joint_index[info[1].decode()] = index
+            self._link_index[info[12].decode()] = index
+        missing = [name for name in joint_names if name not in joint_index]
+        if missing:
+            self.remove()
+            raise DescriptionError(f"PyBullet body lacks joints {', '.join(missing)}")
+        self.joint_indices = [joint_index[name] for name in joint_names]
+        n = len(self.joint_indices)
+        self.position = np.zeros(n)
+        self.velocity = np.zeros(n)
+        self.effort_command = np.zeros(n)
+        self._torque_mode = False
+        self.engage_brakes()
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        return tuple(self._link_index)
+
+    def reset(self, positions: FloatArray) -> None:
+        """Teleport the joints to ``positions`` at rest (only before control starts)."""
+        for index, value in zip(self.joint_indices, positions, strict=True):
+            p.resetJointState(self.body_id, index, float(value), 0.0, physicsClientId=self._client)
+        self.read()
+
+    def read(self) -> None:
+        """Fill :attr:`position` and :attr:`velocity` from the physics engine."""
+        states = p.getJointStates(self.body_id, self.joint_indices, physicsClientId=self._client)
+        for i, state in enumerate(states):
+            self.position[i] = state[0]
+            self.velocity[i] = state[1]
+
+    def write(self) -> None:
+        """Apply :attr:`effort_command` as joint torques (no-op while braked)."""
+        if self._torque_mode:
+            p.setJointMotorControlArray(
+                self.body_id,
+                self.joint_indices,
+                p.TORQUE_CONTROL,
+                forces=self.effort_command.tolist(),
+                physicsClientId=self._client,
+            )
+
+    def engage_brakes(self) -> None:
+        """Hold the joints with PyBullet's velocity motors, as a powered-off arm's brakes."""
+        self._torque_mode = False
+        self.effort_command[:] = 0.0
+        p.setJointMotorControlArray(
+            self.body_id,
+            self.joint_indices,
+            p.VELOCITY_CONTROL,
+            targetVelocities=[0.0] * len(self.joint_indices),
+            forces=[_BRAKE_FORCE] * len(self.joint_indices),
+            physicsClientId=self._client,
+        )
+
+    def release_brakes(self) -> None:
+        """Switch to torque mode: the built-in motors are disabled, efforts are ours."""
+        p.setJointMotorControlArray(
+            self.body_id,
+            self.joint_indices,
+            p.VELOCITY_CONTROL,
+            forces=[0.0] * len(self.joint_indices),
+            physicsClientId=self._client,
+        )
+        self._torque_mode = True
+
+    def link_world_pose(self, link: str) -> FloatArray:
+        """4x4 world pose of ``link``'s URDF frame, as PyBullet sees it."""
+        index = self._link_index[link]
+        state = p.getLinkState(
+            self.body_id, index, computeForwardKinematics=True, physicsClientId=self._client
+        )
+        matrix = np.eye(4)
+        matrix[:3, :3] = np.reshape(p.getMatrixFromQuaternion(state[5]), (3, 3))
+        matrix[:3, 3] = state[4]
+        return matrix
+
+    def remove(self) -> None:
+        p.removeBody(self.body_id, physicsClientId=self._client)

@@ -1,0 +1,15 @@
+"""Controllers of an arm, split as in ros2_controllers."""
+
+from armfleet.controllers.controller import ArmContext, Controller, LifecycleState
+from armfleet.controllers.controller_manager import ControllerManager
+from armfleet.controllers.joint_state_broadcaster import JointStateBroadcaster
+from armfleet.controllers.position_controller import PositionController
+
+__all__ = [
+    "ArmContext",
+    "Controller",
+    "ControllerManager",
+    "JointStateBroadcaster",
+    "LifecycleState",
+    "PositionController",
+]

@@ -1,0 +1,168 @@
+"""position_controller: jerk-limited motion to target joint positions, in torque mode.
+
+Each update pairs the Ruckig reference for time t with the state measured at
+t, and computes
+
+    tau = RNEA(q, v, qdd_ref + kp (q_ref - q) + kd (v_ref - v)) + damping * v
+
+clipped to the URDF effort limits. Joints off the base_link -> tool0 chain
+(fingers) are held where they were when the controller was activated.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from armfleet.controllers.controller import Controller
+from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
+from armfleet.controllers.parameters import ParameterSpec
+from armfleet.errors import ArmfleetError, JointLimitError, NonFiniteTarget, TargetLengthError
+from armfleet.messages import ControllerState, FloatArray, JointCommand
+
+logger = logging.getLogger("armfleet")
+
+
+class PositionController(Controller):
+    """Takes target joint positions on ``/<arm>/position_controller/commands``."""
+
+    type_name = "position_controller"
+    rate_parameter = "update_rate_hz"
+    parameter_schema = (
+        ParameterSpec("update_rate_hz", 1000.0, "control rate [Hz]", 1.0, 100_000.0),
+        ParameterSpec("velocity_scaling", 0.95, "fraction of the URDF velocity limit", 0.01, 1.0),
+        ParameterSpec("max_acceleration_rad_s2", 5.0, "acceleration limit [rad/s^2]", 1e-3, 1e4),
+        ParameterSpec("max_jerk_rad_s3", 50.0, "jerk limit [rad/s^3]", 1e-3, 1e6),
+        ParameterSpec("kp_s2", 2500.0, "position feedback gain [1/s^2]", 0.0, 1e6),
+        ParameterSpec("kd_s", 100.0, "velocity feedback gain [1/s]", 0.0, 1e4),
+        ParameterSpec("hold_tolerance_rad", 1e-3, "holding tolerance [rad]", 1e-9, 1.0),
+    )
+
+    def on_configure(self) -> None:
+        kinematics = self.arm.kinematics
+        self._arm = kinematics.arm_indices
+        self._aux = kinematics.auxiliary_indices
+        self.joint_names = tuple(kinematics.joint_names[i] for i in self._arm)
+        self.lower = kinematics.lower[self._arm]
+        self.upper = kinematics.upper[self._arm]
+        self.max_velocity = kinematics.velocity_limit[self._arm] * self.parameters[
+            "velocity_scaling"
+        ]
+        self._kp = self.parameters["kp_s2"]
+        self._kd = self.parameters["kd_s"]
+        self._effort_limit = kinematics.effort_limit
+        self._acceleration = np.zeros(len(kinematics.joint_names))
+        self._aux_hold = np.zeros(len(self._aux))
+        self.trajectory: JerkLimitedTrajectory | None = None
+        self._state_topic = self.arm.topic("position_controller/state")
+        self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
+        self.arm.bus.advertise(self._state_topic, ControllerState)
+        self.arm.bus.subscribe(self.arm.topic("position_controller/commands"), self._on_command)
+
+    def on_activate(self) -> None:
+        body = self.arm.body
+        body.read()
+        n = len(self._arm)
+        self.trajectory = JerkLimitedTrajectory(
+            body.position[self._arm],
+            self.period,
+            self.max_velocity,
+            np.full(n, self.parameters["max_acceleration_rad_s2"]),
+            np.full(n, self.parameters["max_jerk_rad_s3"]),
+        )
+        self._aux_hold = body.position[self._aux].copy()
+        body.release_brakes()
+
+    def on_deactivate(self) -> None:
+        self.arm.body.engage_brakes()
+
+    @property
+    def is_moving(self) -> bool:
+        return self.trajectory is not None and self.trajectory.moving
+
+    @property
+    def tracking_error(self) -> float:
+        """Largest |q_ref - q| over the arm joints [rad or m]."""
+        if self.trajectory is None:
+            return math.inf
+        q = self.arm.body.position[self._arm]
+        return float(np.max(np.abs(self.trajectory.position - q)))
+
+    @property
+    def is_holding(self) -> bool:
+        return not self.is_moving and self.tracking_error < self.parameters["hold_tolerance_rad"]
+
+    def validate(self, target: Sequence[float]) -> FloatArray:
+        """Return ``target`` as an array, or raise the error a user needs to fix it."""
+        return check_target(self.arm.name, target, self.joint_names, self.lower, self.upper)
+
+    def set_target(self, target: Sequence[float]) -> float:
+        """Plan a motion to ``target``; returns its duration [s]."""
+        values = self.validate(target)
+        if self.trajectory is None:
+            raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
+        return self.trajectory.set_target(values)
+
+    def _on_command(self, command: JointCommand) -> None:
+        try:
+            self.set_target(command.positions)
+        except ArmfleetError as exc:
+            logger.warning("rejected command: %s", exc)
+
+    def update(self, stamp: float) -> None:
+        trajectory = self.trajectory
+        assert trajectory is not None  # set by on_activate
+        body = self.arm.body
+        q, v = body.position, body.velocity
+        acceleration = self._acceleration
+        arm, aux = self._arm, self._aux
+        acceleration[arm] = (
+            trajectory.acceleration
+            + self._kp * (trajectory.position - q[arm])
+            + self._kd * (trajectory.velocity - v[arm])
+        )
+        if aux.size:
+            acceleration[aux] = self._kp * (self._aux_hold - q[aux]) - self._kd * v[aux]
+        tau = self.arm.kinematics.inverse_dynamics(q, v, acceleration)
+        np.clip(tau, -self._effort_limit, self._effort_limit, out=body.effort_command)
+        if self.arm.bus.has_subscribers(self._state_topic):
+            self.arm.bus.publish(
+                self._state_topic,
+                ControllerState(
+                    stamp, self.joint_names, trajectory.position.copy(),
+                    trajectory.velocity.copy(), trajectory.acceleration.copy(),
+                    q[arm].copy(), v[arm].copy(), trajectory.moving,
+                ),
+            )
+        trajectory.advance()
+
+
+def check_target(
+    arm: str,
+    target: Sequence[float],
+    joint_names: Sequence[str],
+    lower: FloatArray,
+    upper: FloatArray,
+) -> FloatArray:
+    """Return ``target`` as an array if it has one finite in-limit value per joint.
+
+    Raises:
+        TargetLengthError, NonFiniteTarget, JointLimitError.
+    """
+    try:
+        values = np.asarray(target, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ArmfleetError(
+            f"{arm}: targets must be numbers, one per joint: {', '.join(joint_names)}"
+        ) from None
+    if values.size != len(joint_names):
+        raise TargetLengthError(arm, values.size, joint_names)
+    for name, value, low, high in zip(joint_names, values, lower, upper, strict=True):
+        if not math.isfinite(value):
+            raise NonFiniteTarget(arm, name, float(value))
+        if not low <= value <= high:
+            raise JointLimitError(arm, name, float(value), float(low), float(high))
+    return values

@@ -1,0 +1,157 @@
+"""The arm models armfleet knows: one ``<model>.urdf.xacro`` per model in ``description/``.
+
+The list of models is read from the folder every time, never kept by hand.
+Expanding a model gives the URDF of one arm: every link and joint prefixed,
+the world anchor placed at the spawn pose, every URI resolved to an absolute
+path. The same text feeds PyBullet, Pinocchio and the viewer.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import xml.etree.ElementTree as ET
+from xml.dom import minidom
+from dataclasses import dataclass
+from pathlib import Path
+
+import xacro
+
+from armfleet.description.resource_resolver import ResourceResolver
+from armfleet.description.upstream_macro import XACRO_NS, prefixable_macro
+from armfleet.errors import DescriptionError, UnknownModel
+from armfleet.paths import data_dir
+from armfleet.spawn_pose import SpawnPose
+
+XACRO_SUFFIX = ".urdf.xacro"
+UPSTREAM_PROPERTY = "armfleet_upstream_urdf"
+HOME_PROPERTY = "armfleet_home"
+
+
+@dataclass(frozen=True)
+class ArmDescription:
+    """The expanded description of one arm.
+
+    Attributes:
+        model: model name (the xacro file's stem).
+        prefix: prefix of every link and joint, e.g. ``"bob_"``.
+        urdf: URDF text with absolute mesh paths.
+        home: home positions of the arm joints in chain order [rad or m].
+    """
+
+    model: str
+    prefix: str
+    urdf: str
+    home: tuple[float, ...]
+
+    @property
+    def base_link(self) -> str:
+        return f"{self.prefix}base_link"
+
+    @property
+    def tool0(self) -> str:
+        return f"{self.prefix}tool0"
+
+
+class ModelLibrary:
+    """The models in a description folder.
+
+    Args:
+        folder: folder of ``<model>.urdf.xacro`` files; armfleet's own by default.
+        resolver: the URI resolver; a default one if omitted.
+    """
+
+    def __init__(self, folder: Path | None = None, resolver: ResourceResolver | None = None):
+        self._folder = folder or data_dir("description")
+        self._resolver = resolver or ResourceResolver()
+        self._macros: dict[str, str] = {}
+
+    @property
+    def folder(self) -> Path:
+        return self._folder
+
+    @property
+    def resolver(self) -> ResourceResolver:
+        return self._resolver
+
+    @property
+    def names(self) -> list[str]:
+        """Model names, sorted, derived from the files in the folder."""
+        return sorted(p.name[: -len(XACRO_SUFFIX)] for p in self._folder.glob(f"*{XACRO_SUFFIX}"))
+
+    def path(self, model: str) -> Path:
+        """Path of a model's xacro file; raises :class:`UnknownModel`."""
+        path = self._folder / f"{model}{XACRO_SUFFIX}"
+        if not path.is_file():
+            raise UnknownModel(model, self.names)
+        return path
+
+    def expand(self, model: str, prefix: str, pose: SpawnPose | None = None) -> ArmDescription:
+        """Expand ``model`` for an arm whose names start with ``prefix``, placed at ``pose``."""
+        path = self.path(model)
+        pose = pose or SpawnPose()
+        properties = _top_level_properties(path)
+        upstream_uri = properties.get(UPSTREAM_PROPERTY)
+        if upstream_uri is None:
+            raise DescriptionError(f"{path}: missing <xacro:property name={UPSTREAM_PROPERTY!r}>")
+        home = _parse_home(path, properties.get(HOME_PROPERTY, ""))
+
+        with tempfile.TemporaryDirectory(prefix="armfleet-xacro-") as tmp:
+            macro_path = Path(tmp) / f"{model}_upstream.xacro"
+            macro_path.write_text(self._upstream_macro(upstream_uri))
+            mappings = {
+                "prefix": prefix,
+                "xyz": f"{pose.x!r} {pose.y!r} {pose.z!r}",
+                "rpy": f"0 0 {pose.yaw_rad!r}",
+                "upstream_macro": str(macro_path),
+            }
+            try:
+                document = xacro.process_file(str(path), mappings=mappings)
+            except Exception as exc:  # xacro raises bare Exceptions (XacroException, XML errors)
+                raise DescriptionError(f"{path}: xacro failed: {exc}") from exc
+            _make_massless_links_explicit(document)
+            text = document.toprettyxml(indent="  ")
+        return ArmDescription(model, prefix, self._resolver.resolve_text(text), home)
+
+    def _upstream_macro(self, uri: str) -> str:
+        if uri not in self._macros:
+            upstream = self._resolver.resolve(uri)
+            self._macros[uri] = prefixable_macro(upstream.read_text(), "upstream", str(upstream))
+        return self._macros[uri]
+
+
+def _make_massless_links_explicit(document: minidom.Document) -> None:
+    """Give every link without ``<inertial>`` (except ``world``) an explicit zero mass.
+
+    URDF means "no mass" by an absent inertial; PyBullet instead invents 1 kg,
+    which would make its dynamics disagree with Pinocchio's.
+    """
+    for link in document.getElementsByTagName("link"):
+        if link.getAttribute("name") == "world" or link.getElementsByTagName("inertial"):
+            continue
+        inertial = document.createElement("inertial")
+        mass = document.createElement("mass")
+        mass.setAttribute("value", "0")
+        inertia = document.createElement("inertia")
+        for component in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+            inertia.setAttribute(component, "0")
+        inertial.appendChild(mass)
+        inertial.appendChild(inertia)
+        link.appendChild(inertial)
+
+
+def _top_level_properties(path: Path) -> dict[str, str]:
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        raise DescriptionError(f"{path} is not valid XML: {exc}") from exc
+    return {
+        element.get("name", ""): element.get("value", "")
+        for element in root.findall(f"{{{XACRO_NS}}}property")
+    }
+
+
+def _parse_home(path: Path, text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(v) for v in text.split())
+    except ValueError:
+        raise DescriptionError(f"{path}: {HOME_PROPERTY} {text!r} must be numbers") from None

@@ -1,0 +1,107 @@
+"""Errors a user can cause, each naming the problem and the valid choices.
+
+Every error armfleet raises on bad input derives from :class:`ArmfleetError`;
+the CLI turns one into a single line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+
+def _choices(values: Iterable[str]) -> str:
+    listed = sorted(values)
+    return ", ".join(listed) if listed else "(none)"
+
+
+class ArmfleetError(Exception):
+    """Root of every error armfleet raises for something a user can fix."""
+
+
+class UnknownModel(ArmfleetError):
+    def __init__(self, name: str, available: Sequence[str]) -> None:
+        self.name = name
+        self.available = tuple(available)
+        super().__init__(f"model {name!r} not found; available: {_choices(available)}")
+
+
+class InvalidArmName(ArmfleetError):
+    def __init__(self, name: str, pattern: str) -> None:
+        self.name = name
+        super().__init__(
+            f"arm name {name!r} is malformed; a name must match {pattern} "
+            "(lowercase letter first, then lowercase letters, digits or '_')"
+        )
+
+
+class DuplicateArmName(ArmfleetError):
+    def __init__(self, name: str, existing: Sequence[str]) -> None:
+        self.name = name
+        super().__init__(
+            f"arm name {name!r} is already used in this world; arms: {_choices(existing)}"
+        )
+
+
+class UnknownArm(ArmfleetError):
+    def __init__(self, name: str, existing: Sequence[str]) -> None:
+        self.name = name
+        super().__init__(f"no arm named {name!r}; arms: {_choices(existing)}")
+
+
+class UnknownFrame(ArmfleetError):
+    def __init__(self, frame: str, hint: str) -> None:
+        self.frame = frame
+        super().__init__(f"frame {frame!r} not found; {hint}")
+
+
+class TargetLengthError(ArmfleetError):
+    def __init__(self, arm: str, got: int, joint_names: Sequence[str]) -> None:
+        self.arm = arm
+        super().__init__(
+            f"{arm}: got {got} target positions, expected {len(joint_names)} "
+            f"(one per joint: {', '.join(joint_names)})"
+        )
+
+
+class NonFiniteTarget(ArmfleetError):
+    def __init__(self, arm: str, joint: str, value: float) -> None:
+        self.arm, self.joint = arm, joint
+        super().__init__(f"{arm}: target for {joint} is {value}; targets must be finite numbers")
+
+
+class JointLimitError(ArmfleetError):
+    def __init__(self, arm: str, joint: str, value: float, lower: float, upper: float) -> None:
+        self.arm, self.joint = arm, joint
+        self.value, self.lower, self.upper = value, lower, upper
+        super().__init__(
+            f"{arm}: target {value:.6g} for {joint} is outside its limits "
+            f"[{lower:.6g}, {upper:.6g}]"
+        )
+
+
+class PoseError(ArmfleetError):
+    """A spawn pose that cannot be parsed or is not finite."""
+
+
+class DescriptionError(ArmfleetError):
+    """A robot description (xacro/URDF) that cannot be expanded or loaded."""
+
+
+class ResourceNotFound(DescriptionError):
+    def __init__(self, uri: str, searched: Sequence[str]) -> None:
+        self.uri = uri
+        self.searched = tuple(searched)
+        super().__init__(f"cannot resolve {uri!r}; searched: {', '.join(searched) or '(nothing)'}")
+
+
+class ParameterError(ArmfleetError):
+    """A controller parameter file or override that does not fit its schema."""
+
+
+class BringupError(ArmfleetError):
+    """An arm that did not reach a bring-up stage in time."""
+
+
+class WorldClosed(ArmfleetError):
+    def __init__(self) -> None:
+        super().__init__("this world is closed; create a new armfleet.World()")

@@ -1,0 +1,120 @@
+"""Pinocchio model of one arm, built from the very URDF text PyBullet loaded."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from armfleet.errors import DescriptionError
+from armfleet.messages import FloatArray
+
+
+@dataclass(frozen=True)
+class LinkEdge:
+    """One URDF joint seen as a transform between two links.
+
+    Attributes:
+        parent, child: link names.
+        fixed: whether the joint is fixed (its transform is static).
+    """
+
+    parent: str
+    child: str
+    fixed: bool
+
+
+class ArmKinematics:
+    """Kinematics and dynamics of one arm.
+
+    The model's root is the world: its fixed ``world -> <prefix>base_link``
+    joint carries the spawn pose, so every frame placement is a world pose.
+
+    Args:
+        urdf: URDF text with the arm's prefixed names.
+        tool_frame: the flange frame whose support chain defines the arm joints.
+    """
+
+    def __init__(self, urdf: str, tool_frame: str) -> None:
+        try:
+            self.model = pin.buildModelFromXML(urdf)
+        except (RuntimeError, ValueError) as exc:
+            raise DescriptionError(f"Pinocchio cannot build the model: {exc}") from exc
+        self.data = self.model.createData()
+        if self.model.nq != self.model.nv:
+            names = [
+                self.model.names[j]
+                for j in range(1, self.model.njoints)
+                if self.model.joints[j].nq != self.model.joints[j].nv
+            ]
+            raise DescriptionError(f"unsupported continuous/multi-DoF joints: {', '.join(names)}")
+        if not self.model.existFrame(tool_frame):
+            raise DescriptionError(f"the description has no landmark frame {tool_frame!r}")
+        tool_joint = self.model.frames[self.model.getFrameId(tool_frame)].parentJoint
+        chain = {j for j in self.model.supports[tool_joint] if j != 0}
+        #: Names of all movable joints, in model (configuration) order.
+        self.joint_names: tuple[str, ...] = tuple(self.model.names[1:])
+        #: Indices (into q) of the joints between base_link and tool0.
+        self.arm_indices = np.array([self.model.joints[j].idx_q for j in sorted(chain)])
+        #: Indices (into q) of the other movable joints (fingers, ...).
+        self.auxiliary_indices = np.array(
+            [self.model.joints[j].idx_q for j in range(1, self.model.njoints) if j not in chain],
+            dtype=int,
+        )
+        self.lower = np.array(self.model.lowerPositionLimit, dtype=float)
+        self.upper = np.array(self.model.upperPositionLimit, dtype=float)
+        self.velocity_limit = np.array(self.model.velocityLimit, dtype=float)
+        self.effort_limit = np.array(self.model.effortLimit, dtype=float)
+        self.damping = np.array(self.model.damping, dtype=float)
+        self._frame_ids = {frame.name: i for i, frame in enumerate(self.model.frames)}
+        self._fk_q: FloatArray | None = None
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """Every link (body frame) of the model, ``world`` included."""
+        return tuple(f.name for f in self.model.frames if f.type == pin.FrameType.BODY)
+
+    @property
+    def frame_names(self) -> tuple[str, ...]:
+        """Links and joints, without Pinocchio's ``universe``."""
+        return tuple(f.name for f in self.model.frames if f.name != "universe")
+
+    def has_frame(self, name: str) -> bool:
+        return name in self._frame_ids
+
+    def link_edges(self) -> tuple[LinkEdge, ...]:
+        """Every URDF joint as parent link -> child link."""
+        frames = self.model.frames
+        edges = []
+        for frame in frames:
+            if frame.type != pin.FrameType.BODY or frame.name == "world":
+                continue
+            joint_frame = frames[frame.parentFrame]
+            if joint_frame.type not in (pin.FrameType.JOINT, pin.FrameType.FIXED_JOINT):
+                continue
+            parent = frames[joint_frame.parentFrame].name
+            edges.append(
+                LinkEdge(parent, frame.name, joint_frame.type == pin.FrameType.FIXED_JOINT)
+            )
+        return tuple(edges)
+
+    def update(self, q: FloatArray) -> None:
+        """Compute every frame placement for configuration ``q`` (cached per q)."""
+        if self._fk_q is not None and np.array_equal(self._fk_q, q):
+            return
+        pin.framesForwardKinematics(self.model, self.data, q)
+        self._fk_q = q.copy()
+
+    def world_pose(self, frame: str) -> FloatArray:
+        """4x4 world pose of ``frame`` at the configuration of the last :meth:`update`."""
+        return np.array(self.data.oMf[self._frame_ids[frame]].homogeneous)
+
+    def inverse_dynamics(self, q: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
+        """Joint torques for acceleration ``a``: RNEA plus the URDF viscous damping.
+
+        PyBullet applies the URDF joint damping (``-damping * v``); RNEA does not,
+        so it is added here for the two to agree.
+        """
+        tau: FloatArray = pin.rnea(self.model, self.data, q, v, a) + self.damping * v
+        return tau

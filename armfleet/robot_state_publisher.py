@@ -1,0 +1,62 @@
+"""Per-arm transforms: static ones on ``/tf_static`` at spawn, moving ones on ``/tf``.
+
+As ROS's robot_state_publisher: one transform per URDF joint, parent link ->
+child link, plus ``world -> <arm>_base_link`` carrying the spawn pose.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armfleet.bus import Bus, Subscription
+from armfleet.kinematics import ArmKinematics
+from armfleet.messages import JointState, TFMessage, TransformStamped
+
+TF_TOPIC = "/tf"
+TF_STATIC_TOPIC = "/tf_static"
+
+
+class RobotStatePublisher:
+    """Publishes one arm's transforms.
+
+    Args:
+        arm: arm name.
+        kinematics: the arm's model.
+        bus: the world's bus.
+        stamp: simulated time of the spawn [s].
+    """
+
+    def __init__(self, arm: str, kinematics: ArmKinematics, bus: Bus, stamp: float) -> None:
+        self._arm = arm
+        self._kinematics = kinematics
+        self._bus = bus
+        edges = kinematics.link_edges()
+        self._moving = tuple(e for e in edges if not e.fixed)
+        bus.advertise(TF_TOPIC, TFMessage)
+        bus.advertise(TF_STATIC_TOPIC, TFMessage)
+        # The static edges do not depend on q: any configuration gives them.
+        kinematics.update(np.clip(np.zeros(kinematics.model.nq), kinematics.lower, kinematics.upper))
+        static = tuple(self._transform(stamp, e.parent, e.child) for e in edges if e.fixed)
+        self.static_message = TFMessage(static)
+        bus.publish(TF_STATIC_TOPIC, self.static_message, latch=True)
+        self._subscription: Subscription = bus.subscribe(f"/{arm}/joint_states", self._on_state)
+
+    def _transform(self, stamp: float, parent: str, child: str) -> TransformStamped:
+        kinematics = self._kinematics
+        matrix = np.linalg.solve(kinematics.world_pose(parent), kinematics.world_pose(child))
+        return TransformStamped(stamp, parent, child, matrix)
+
+    def _on_state(self, state: JointState) -> None:
+        if not self._bus.has_subscribers(TF_TOPIC):
+            return
+        self._kinematics.update(state.position)
+        self._bus.publish(
+            TF_TOPIC,
+            TFMessage(tuple(self._transform(state.stamp, e.parent, e.child) for e in self._moving)),
+        )
+
+    def close(self) -> None:
+        """Stop publishing and withdraw the arm's static transforms."""
+        self._subscription.cancel()
+        mine = self.static_message
+        self._bus.forget_latched(TF_STATIC_TOPIC, lambda message: message is mine)

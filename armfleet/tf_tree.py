@@ -1,0 +1,52 @@
+"""Transform lookup between any two frames of a world."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from armfleet.errors import UnknownFrame
+from armfleet.kinematics import ArmKinematics
+from armfleet.messages import FloatArray
+
+WORLD_FRAME = "world"
+
+
+class TfTree:
+    """Looks up transforms from the arms' models at their latest measured state.
+
+    Args:
+        arms: callable returning, per arm name, its kinematics and the current
+            joint positions (read from the physics engine at the last step).
+    """
+
+    def __init__(
+        self, arms: Callable[[], Mapping[str, tuple[ArmKinematics, FloatArray]]]
+    ) -> None:
+        self._arms = arms
+
+    def world_pose(self, frame: str) -> FloatArray:
+        """4x4 pose of ``frame`` in ``world``."""
+        if frame == WORLD_FRAME:
+            return np.eye(4)
+        arms = self._arms()
+        for kinematics, positions in arms.values():
+            if kinematics.has_frame(frame):
+                kinematics.update(positions)
+                return kinematics.world_pose(frame)
+        names = ", ".join(sorted(arms)) or "none yet"
+        raise UnknownFrame(
+            frame, f"frames are 'world' and the arms' prefixed links (arms: {names}; "
+            "e.g. <arm>_base_link, <arm>_tool0)"
+        )
+
+    def lookup(self, target_frame: str, source_frame: str) -> FloatArray:
+        """Pose of ``source_frame`` in ``target_frame`` (4x4), as tf2's lookupTransform.
+
+        ``lookup("world", "bob_tool0")`` is bob's flange in world coordinates.
+        """
+        target = self.world_pose(target_frame)
+        source = self.world_pose(source_frame)
+        result: FloatArray = np.linalg.solve(target, source)
+        return result

@@ -1,0 +1,310 @@
+"""One PyBullet world holding several arms, stepped by one thread at a fixed dt."""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pybullet as p
+
+from armfleet.arm import Arm
+from armfleet.arm_body import ArmBody
+from armfleet.bus import Bus
+from armfleet.controllers import (
+    ArmContext,
+    ControllerManager,
+    JointStateBroadcaster,
+    PositionController,
+)
+from armfleet.controllers.position_controller import check_target
+from armfleet.description import ModelLibrary
+from armfleet.errors import ArmfleetError, BringupError, DescriptionError, UnknownArm, WorldClosed
+from armfleet.kinematics import ArmKinematics
+from armfleet.messages import BringupEvent, BringupStage, FloatArray, JointState
+from armfleet.names import check_arm_name
+from armfleet.robot_state_publisher import RobotStatePublisher
+from armfleet.spawn_pose import SpawnPose
+from armfleet.tf_tree import TfTree
+
+logger = logging.getLogger("armfleet")
+
+BRINGUP_TOPIC = "/bringup"
+#: Simulated time an arm may take to publish its first joint state / to hold [s].
+BROADCASTER_TIMEOUT_S = 1.0
+HOLD_TIMEOUT_S = 2.0
+#: Consecutive holding steps that make an arm ready.
+HOLD_STEPS = 20
+
+ControllerOverrides = Mapping[str, Mapping[str, Any]]
+
+
+class World:
+    """A PyBullet world (DIRECT mode) with gravity, a ground plane and arms.
+
+    Args:
+        dt: physics step [s].
+        gravity: gravitational acceleration along -z [m/s^2].
+        models: library of arm models; armfleet's ``description/`` by default.
+    """
+
+    def __init__(
+        self, dt: float = 0.001, gravity: float = 9.81, models: ModelLibrary | None = None
+    ) -> None:
+        if not (math.isfinite(dt) and 0 < dt <= 0.1):
+            raise ArmfleetError(f"dt = {dt} s is invalid; choose a step in (0, 0.1] s")
+        self._dt = dt
+        self._client = p.connect(p.DIRECT)
+        p.setTimeStep(dt, physicsClientId=self._client)
+        p.setGravity(0.0, 0.0, -gravity, physicsClientId=self._client)
+        plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=self._client)
+        self._ground = p.createMultiBody(0.0, plane, physicsClientId=self._client)
+        self._models = models or ModelLibrary()
+        self._bus = Bus()
+        self._bus.advertise(BRINGUP_TOPIC, BringupEvent)
+        self._arms: dict[str, Arm] = {}
+        self._step_index = 0
+        self._closed = False
+        self._tf = TfTree(self._arm_states)
+
+    # -- properties -------------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        """Physics step [s]."""
+        return self._dt
+
+    @property
+    def time(self) -> float:
+        """Simulated time [s]."""
+        return self._step_index * self._dt
+
+    @property
+    def bus(self) -> Bus:
+        return self._bus
+
+    @property
+    def tf(self) -> TfTree:
+        return self._tf
+
+    @property
+    def models(self) -> ModelLibrary:
+        return self._models
+
+    @property
+    def arms(self) -> dict[str, Arm]:
+        """Arms by name, in bring-up order."""
+        return dict(self._arms)
+
+    @property
+    def physics_client(self) -> int:
+        """PyBullet client id of this world (for inspection; don't step it yourself)."""
+        return self._client
+
+    def arm(self, name: str) -> Arm:
+        if name not in self._arms:
+            raise UnknownArm(name, list(self._arms))
+        return self._arms[name]
+
+    # -- bring-up ---------------------------------------------------------------------
+    def spawn(
+        self,
+        name: str,
+        model: str = "panda",
+        at: Sequence[float] | SpawnPose = (0.0, 0.0),
+        *,
+        initial_positions: Sequence[float] | None = None,
+        parameters: ControllerOverrides | None = None,
+    ) -> Arm:
+        """Bring an arm up, stage by stage, and return it once ready.
+
+        Stages (each published on ``/bringup``): spawned -> joint_state_broadcaster
+        active (first joint state seen) -> position_controller active -> ready
+        (holding its pose). Nothing else is brought up meanwhile.
+
+        Args:
+            name: arm name (``^[a-z][a-z0-9_]*$``), its namespace and prefix.
+            model: one of :attr:`models` ``.names``.
+            at: ``(x, y[, z[, yaw_deg]])`` of ``<name>_base_link`` [m, deg].
+            initial_positions: arm joint positions at spawn; the model's home by default.
+            parameters: per-controller parameter overrides for this arm only,
+                e.g. ``{"position_controller": {"kp_s2": 900.0}}``.
+
+        Raises:
+            ArmfleetError: bad name, model, pose or positions; the world is unchanged.
+        """
+        self._check_open()
+        check_arm_name(name, self._arms)
+        pose = SpawnPose.from_values(at)
+        unknown = set(parameters or {}) - {"joint_state_broadcaster", "position_controller"}
+        if unknown:
+            raise ArmfleetError(
+                f"parameters for unknown controllers {', '.join(sorted(unknown))}; "
+                "valid: joint_state_broadcaster, position_controller"
+            )
+        description = self._models.expand(model, f"{name}_", pose)
+        kinematics = ArmKinematics(description.urdf, description.tool0)
+        start = self._start_positions(name, kinematics, description.home, initial_positions)
+        started = time.perf_counter()
+
+        body = ArmBody(self._client, description.urdf, kinematics.joint_names)
+        try:
+            body.reset(start)
+            context = ArmContext(name, body, kinematics, self._bus, self._dt)
+            manager = ControllerManager(name)
+            overrides = parameters or {}
+            broadcaster = JointStateBroadcaster(
+                context, overrides=overrides.get("joint_state_broadcaster")
+            )
+            controller = PositionController(context, overrides=overrides.get("position_controller"))
+            manager.load(broadcaster)
+            manager.load(controller)
+            # Validate both parameter sets before the arm joins the world.
+            broadcaster.configure()
+            controller.configure()
+        except BaseException:
+            body.remove()
+            raise
+        publisher = RobotStatePublisher(name, kinematics, self._bus, self.time)
+        arm = Arm(
+            name, pose, description, body, kinematics, self._bus, manager, broadcaster,
+            controller, publisher,
+        )
+        self._arms[name] = arm
+        try:
+            self._report(name, BringupStage.SPAWNED, started)
+            self._activate_broadcaster(arm)
+            self._report(name, BringupStage.BROADCASTER_ACTIVE, started)
+            manager.activate("position_controller")
+            self._report(name, BringupStage.CONTROLLER_ACTIVE, started)
+            self._wait_holding(arm)
+            self._report(name, BringupStage.READY, started)
+        except BaseException:
+            self._remove(arm)
+            raise
+        return arm
+
+    def _start_positions(
+        self,
+        name: str,
+        kinematics: ArmKinematics,
+        home: Sequence[float],
+        initial: Sequence[float] | None,
+    ) -> FloatArray:
+        lower, upper = kinematics.lower, kinematics.upper
+        start = np.where(
+            (lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper)
+        ).astype(float)
+        arm = kinematics.arm_indices
+        if len(home) != len(arm):
+            raise DescriptionError(f"home pose has {len(home)} values for {len(arm)} arm joints")
+        start[arm] = home
+        if initial is not None:
+            # Same checks, same messages as a motion target.
+            start[arm] = check_target(
+                name, initial, [kinematics.joint_names[i] for i in arm], lower[arm], upper[arm]
+            )
+        return start
+
+    def _activate_broadcaster(self, arm: Arm) -> None:
+        seen: list[JointState] = []
+        subscription = self._bus.subscribe(f"/{arm.name}/joint_states", seen.append)
+        try:
+            arm.controller_manager.activate("joint_state_broadcaster")
+            deadline = self._step_index + math.ceil(BROADCASTER_TIMEOUT_S / self._dt)
+            while not seen:
+                if self._step_index >= deadline:
+                    raise BringupError(f"{arm.name}: no joint state within {BROADCASTER_TIMEOUT_S} s")
+                self.step()
+        finally:
+            subscription.cancel()
+
+    def _wait_holding(self, arm: Arm) -> None:
+        deadline = self._step_index + math.ceil(HOLD_TIMEOUT_S / self._dt)
+        holding = 0
+        while holding < HOLD_STEPS:
+            if self._step_index >= deadline:
+                raise BringupError(
+                    f"{arm.name}: not holding its pose after {HOLD_TIMEOUT_S} s "
+                    f"(tracking error {arm.position_controller.tracking_error:.3g} rad)"
+                )
+            self.step()
+            holding = holding + 1 if arm.position_controller.is_holding else 0
+
+    def _report(self, arm: str, stage: BringupStage, started: float) -> None:
+        event = BringupEvent(arm, stage, self.time, time.perf_counter() - started)
+        logger.info("%s: %s", arm, stage.value)
+        self._bus.publish(BRINGUP_TOPIC, event)
+
+    def _remove(self, arm: Arm) -> None:
+        arm.state_publisher.close()
+        arm.body.remove()
+        del self._arms[arm.name]
+
+    # -- stepping ---------------------------------------------------------------------
+    def step(self) -> None:
+        """Advance one physics step: read joints, update controllers, write torques, step."""
+        self._check_open()
+        stamp = self.time
+        arms = self._arms.values()
+        for arm in arms:
+            arm.body.read()
+        for arm in arms:
+            arm.controller_manager.update(stamp, self._step_index)
+        for arm in arms:
+            arm.body.write()
+        p.stepSimulation(physicsClientId=self._client)
+        self._step_index += 1
+
+    def run(
+        self,
+        duration: float,
+        *,
+        realtime: bool = False,
+        on_step: Callable[[World], None] | None = None,
+    ) -> None:
+        """Advance ``duration`` seconds of simulated time.
+
+        Args:
+            duration: simulated time to advance [s].
+            realtime: pace the steps to the wall clock instead of running flat out.
+            on_step: called after every step (e.g. for logging).
+        """
+        if not (math.isfinite(duration) and duration >= 0):
+            raise ArmfleetError(f"duration = {duration} s is invalid; give a finite time >= 0")
+        steps = round(duration / self._dt)
+        wall_start, sim_start = time.perf_counter(), self.time
+        for _ in range(steps):
+            self.step()
+            if on_step is not None:
+                on_step(self)
+            if realtime:
+                ahead = (self.time - sim_start) - (time.perf_counter() - wall_start)
+                if ahead > 0.002:
+                    time.sleep(ahead)
+
+    # -- lifetime ---------------------------------------------------------------------
+    def _arm_states(self) -> dict[str, tuple[ArmKinematics, FloatArray]]:
+        return {name: (arm.kinematics, arm.body.position) for name, arm in self._arms.items()}
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise WorldClosed()
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def close(self) -> None:
+        """Disconnect the physics engine; the world can no longer be used."""
+        if not self._closed:
+            self._closed = True
+            p.disconnect(physicsClientId=self._client)
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
