@@ -5,7 +5,11 @@
 >>> bob = world.spawn("bob", model="panda", at=(0, 0))
 """
 
-from armfleet.arm import Arm
+from armfleet.quiet_pybullet import import_quietly
+
+import_quietly()
+
+from armfleet.arm import Arm  # noqa: E402
 from armfleet.bus import Bus
 from armfleet.errors import ArmfleetError
 from armfleet.messages import (

@@ -6,7 +6,7 @@ import logging
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pybullet as p
@@ -30,6 +30,9 @@ from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.spawn_pose import SpawnPose
 from armfleet.tf_tree import TfTree
 
+if TYPE_CHECKING:
+    from armfleet.viewer import Viewer
+
 logger = logging.getLogger("armfleet")
 
 BRINGUP_TOPIC = "/bringup"
@@ -49,10 +52,19 @@ class World:
         dt: physics step [s].
         gravity: gravitational acceleration along -z [m/s^2].
         models: library of arm models; armfleet's ``description/`` by default.
+        viewer: start a MeshCat viewer (``world.viewer.url``); if it cannot
+            start, the world runs without it and the reason is logged.
+        viewer_port: web port of the viewer; a free one by default.
     """
 
     def __init__(
-        self, dt: float = 0.001, gravity: float = 9.81, models: ModelLibrary | None = None
+        self,
+        dt: float = 0.001,
+        gravity: float = 9.81,
+        models: ModelLibrary | None = None,
+        *,
+        viewer: bool = False,
+        viewer_port: int | None = None,
     ) -> None:
         if not (math.isfinite(dt) and 0 < dt <= 0.1):
             raise ArmfleetError(f"dt = {dt} s is invalid; choose a step in (0, 0.1] s")
@@ -69,6 +81,12 @@ class World:
         self._step_index = 0
         self._closed = False
         self._tf = TfTree(self._arm_states)
+        self._viewer: Viewer | None = None
+        self.viewer_error: str | None = None
+        if viewer:
+            from armfleet.viewer import start_viewer  # meshcat is only loaded when asked for
+
+            self._viewer, self.viewer_error = start_viewer(viewer_port)
 
     # -- properties -------------------------------------------------------------------
     @property
@@ -97,6 +115,11 @@ class World:
     def arms(self) -> dict[str, Arm]:
         """Arms by name, in bring-up order."""
         return dict(self._arms)
+
+    @property
+    def viewer(self) -> Viewer | None:
+        """The MeshCat viewer, or None (not asked for, or it could not start)."""
+        return self._viewer
 
     @property
     def physics_client(self) -> int:
@@ -180,6 +203,8 @@ class World:
             manager.activate("position_controller")
             self._report(name, BringupStage.CONTROLLER_ACTIVE, started)
             self._wait_holding(arm)
+            if self._viewer is not None:
+                self._viewer.add_arm(arm)
             self._report(name, BringupStage.READY, started)
         except BaseException:
             self._remove(arm)
@@ -239,6 +264,8 @@ class World:
         self._bus.publish(BRINGUP_TOPIC, event)
 
     def _remove(self, arm: Arm) -> None:
+        if self._viewer is not None:
+            self._viewer.remove_arm(arm.name)
         arm.state_publisher.close()
         arm.body.remove()
         del self._arms[arm.name]
@@ -257,6 +284,8 @@ class World:
             arm.body.write()
         p.stepSimulation(physicsClientId=self._client)
         self._step_index += 1
+        if self._viewer is not None:
+            self._viewer.tick(self)
 
     def run(
         self,
@@ -301,7 +330,11 @@ class World:
         """Disconnect the physics engine; the world can no longer be used."""
         if not self._closed:
             self._closed = True
-            p.disconnect(physicsClientId=self._client)
+            try:
+                if self._viewer is not None:
+                    self._viewer.close()
+            finally:
+                p.disconnect(physicsClientId=self._client)
 
     def __enter__(self) -> World:
         return self

@@ -1,0 +1,1 @@
+"""The ``armfleet`` command line."""
