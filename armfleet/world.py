@@ -272,18 +272,24 @@ class World:
 
     # -- stepping ---------------------------------------------------------------------
     def step(self) -> None:
-        """Advance one physics step: read joints, update controllers, write torques, step."""
+        """Advance one physics step, as ros2_control's loop around the physics.
+
+        Controllers update with the state measured at the current time (read at
+        the end of the previous step), torques are written, physics steps, and
+        the new state is read, so that :attr:`Arm.positions` and :attr:`tf`
+        always describe the world as it is now.
+        """
         self._check_open()
         stamp = self.time
         arms = self._arms.values()
-        for arm in arms:
-            arm.body.read()
         for arm in arms:
             arm.controller_manager.update(stamp, self._step_index)
         for arm in arms:
             arm.body.write()
         p.stepSimulation(physicsClientId=self._client)
         self._step_index += 1
+        for arm in arms:
+            arm.body.read()
         if self._viewer is not None:
             self._viewer.tick(self)
 
