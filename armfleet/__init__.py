@@ -9,7 +9,7 @@ from armfleet.quiet_pybullet import import_quietly
 
 import_quietly()
 
-from armfleet.arm import Arm  # noqa: E402
+from armfleet.arm import Arm
 from armfleet.bus import Bus
 from armfleet.errors import ArmfleetError
 from armfleet.messages import (

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.description import ArmDescription
 from armfleet.kinematics import ArmKinematics
-from armfleet.messages import FloatArray, JointCommand, JointState
+from armfleet.messages import FloatArray, JointCommand, JointState, Positions
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.spawn_pose import SpawnPose
 
@@ -81,14 +79,15 @@ class Arm:
     @property
     def positions(self) -> FloatArray:
         """Current positions of :attr:`joint_names`, read at the last step."""
-        return self.body.position[self.kinematics.arm_indices].copy()
+        positions: FloatArray = self.body.position[self.kinematics.arm_indices].copy()
+        return positions
 
     @property
     def is_moving(self) -> bool:
         """Whether the position controller's reference is still in motion."""
         return self.position_controller.is_moving
 
-    def move_to(self, positions: Sequence[float]) -> None:
+    def move_to(self, positions: Positions) -> None:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
 
         The command goes out on ``/<name>/position_controller/commands``.

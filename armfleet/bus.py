@@ -54,9 +54,7 @@ class Bus:
         _check_name(topic)
         known = self._types.setdefault(topic, message_type)
         if known is not message_type:
-            raise TopicError(
-                f"topic {topic} carries {known.__name__}, not {message_type.__name__}"
-            )
+            raise TopicError(f"topic {topic} carries {known.__name__}, not {message_type.__name__}")
 
     @property
     def topics(self) -> dict[str, type]:

@@ -35,7 +35,9 @@ class RobotStatePublisher:
         bus.advertise(TF_TOPIC, TFMessage)
         bus.advertise(TF_STATIC_TOPIC, TFMessage)
         # The static edges do not depend on q: any configuration gives them.
-        kinematics.update(np.clip(np.zeros(kinematics.model.nq), kinematics.lower, kinematics.upper))
+        kinematics.update(
+            np.clip(np.zeros(kinematics.model.nq), kinematics.lower, kinematics.upper)
+        )
         static = tuple(self._transform(stamp, e.parent, e.child) for e in edges if e.fixed)
         self.static_message = TFMessage(static)
         bus.publish(TF_STATIC_TOPIC, self.static_message, latch=True)
@@ -43,7 +45,10 @@ class RobotStatePublisher:
 
     def _transform(self, stamp: float, parent: str, child: str) -> TransformStamped:
         kinematics = self._kinematics
-        matrix = np.linalg.solve(kinematics.world_pose(parent), kinematics.world_pose(child))
+        matrix = np.asarray(
+            np.linalg.solve(kinematics.world_pose(parent), kinematics.world_pose(child)),
+            dtype=np.float64,
+        )
         return TransformStamped(stamp, parent, child, matrix)
 
     def _on_state(self, state: JointState) -> None:

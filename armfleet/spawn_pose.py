@@ -51,7 +51,9 @@ class SpawnPose:
         """Parse the CLI form ``X,Y[,Z[,YAW_DEG]]``, e.g. ``1,0`` or ``1,0,0.3,90``."""
         parts = text.split(",")
         if not 2 <= len(parts) <= 4:
-            raise PoseError(f"--at {text!r} is malformed; expected {AT_SYNTAX}, e.g. 1,0 or 1,0,0,90")
+            raise PoseError(
+                f"--at {text!r} is malformed; expected {AT_SYNTAX}, e.g. 1,0 or 1,0,0,90"
+            )
         try:
             numbers = [float(p) for p in parts]
         except ValueError:

@@ -21,9 +21,7 @@ class TfTree:
             joint positions (read from the physics engine at the last step).
     """
 
-    def __init__(
-        self, arms: Callable[[], Mapping[str, tuple[ArmKinematics, FloatArray]]]
-    ) -> None:
+    def __init__(self, arms: Callable[[], Mapping[str, tuple[ArmKinematics, FloatArray]]]) -> None:
         self._arms = arms
 
     def world_pose(self, frame: str) -> FloatArray:
@@ -37,8 +35,9 @@ class TfTree:
                 return kinematics.world_pose(frame)
         names = ", ".join(sorted(arms)) or "none yet"
         raise UnknownFrame(
-            frame, f"frames are 'world' and the arms' prefixed links (arms: {names}; "
-            "e.g. <arm>_base_link, <arm>_tool0)"
+            frame,
+            f"frames are 'world' and the arms' prefixed links (arms: {names}; "
+            "e.g. <arm>_base_link, <arm>_tool0)",
         )
 
     def lookup(self, target_frame: str, source_frame: str) -> FloatArray:
@@ -48,5 +47,4 @@ class TfTree:
         """
         target = self.world_pose(target_frame)
         source = self.world_pose(source_frame)
-        result: FloatArray = np.linalg.solve(target, source)
-        return result
+        return np.asarray(np.linalg.solve(target, source), dtype=np.float64)

@@ -24,7 +24,7 @@ from armfleet.controllers.position_controller import check_target
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, BringupError, DescriptionError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
-from armfleet.messages import BringupEvent, BringupStage, FloatArray, JointState
+from armfleet.messages import BringupEvent, BringupStage, FloatArray, JointState, Positions
 from armfleet.names import check_arm_name
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.spawn_pose import SpawnPose
@@ -69,7 +69,7 @@ class World:
         if not (math.isfinite(dt) and 0 < dt <= 0.1):
             raise ArmfleetError(f"dt = {dt} s is invalid; choose a step in (0, 0.1] s")
         self._dt = dt
-        self._client = p.connect(p.DIRECT)
+        self._client: int = p.connect(p.DIRECT)
         p.setTimeStep(dt, physicsClientId=self._client)
         p.setGravity(0.0, 0.0, -gravity, physicsClientId=self._client)
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=self._client)
@@ -138,7 +138,7 @@ class World:
         model: str = "panda",
         at: Sequence[float] | SpawnPose = (0.0, 0.0),
         *,
-        initial_positions: Sequence[float] | None = None,
+        initial_positions: Positions | None = None,
         parameters: ControllerOverrides | None = None,
     ) -> Arm:
         """Bring an arm up, stage by stage, and return it once ready.
@@ -192,8 +192,16 @@ class World:
             raise
         publisher = RobotStatePublisher(name, kinematics, self._bus, self.time)
         arm = Arm(
-            name, pose, description, body, kinematics, self._bus, manager, broadcaster,
-            controller, publisher,
+            name,
+            pose,
+            description,
+            body,
+            kinematics,
+            self._bus,
+            manager,
+            broadcaster,
+            controller,
+            publisher,
         )
         self._arms[name] = arm
         try:
@@ -216,12 +224,10 @@ class World:
         name: str,
         kinematics: ArmKinematics,
         home: Sequence[float],
-        initial: Sequence[float] | None,
+        initial: Positions | None,
     ) -> FloatArray:
         lower, upper = kinematics.lower, kinematics.upper
-        start = np.where(
-            (lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper)
-        ).astype(float)
+        start = np.where((lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper)).astype(float)
         arm = kinematics.arm_indices
         if len(home) != len(arm):
             raise DescriptionError(f"home pose has {len(home)} values for {len(arm)} arm joints")
@@ -241,7 +247,9 @@ class World:
             deadline = self._step_index + math.ceil(BROADCASTER_TIMEOUT_S / self._dt)
             while not seen:
                 if self._step_index >= deadline:
-                    raise BringupError(f"{arm.name}: no joint state within {BROADCASTER_TIMEOUT_S} s")
+                    raise BringupError(
+                        f"{arm.name}: no joint state within {BROADCASTER_TIMEOUT_S} s"
+                    )
                 self.step()
         finally:
             subscription.cancel()

@@ -50,7 +50,9 @@ def test_static_transform_carries_the_spawn_pose(world: armfleet.World, at) -> N
     world.spawn("bob", at=at)
     expected = armfleet.SpawnPose.from_values(at).matrix()
     base = [
-        t for m in statics for t in m.transforms
+        t
+        for m in statics
+        for t in m.transforms
         if (t.frame_id, t.child_frame_id) == ("world", "bob_base_link")
     ]
     assert len(base) == 1
@@ -83,7 +85,8 @@ def test_tf_chain_composes_to_the_world_pose(pair: armfleet.World) -> None:
         if frame == "world":
             return np.eye(4)
         parent, matrix = edges[frame]
-        return composed(parent) @ matrix
+        result: np.ndarray = composed(parent) @ matrix
+        return result
 
     # /tf carries the state of the last published joint_states, read before the last step.
     toby.kinematics.update(toby.joint_state.position)
@@ -120,7 +123,10 @@ def test_pybullet_and_pinocchio_dynamics_agree(model: str) -> None:
             v, a = rng.normal(size=n), rng.normal(size=n)
             from_bullet = np.array(
                 p.calculateInverseDynamics(
-                    arm.body.body_id, q.tolist(), v.tolist(), a.tolist(),
+                    arm.body.body_id,
+                    q.tolist(),
+                    v.tolist(),
+                    a.tolist(),
                     physicsClientId=world.physics_client,
                 )
             )

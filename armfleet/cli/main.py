@@ -13,12 +13,11 @@ from armfleet.errors import ArmfleetError
 
 
 def build_parser() -> OneLineParser:
-    parser = OneLineParser(
-        prog="armfleet", description="Several robot arms in one PyBullet world."
-    )
+    parser = OneLineParser(prog="armfleet", description="Several robot arms in one PyBullet world.")
     parser.add_argument("--version", action="version", version=f"armfleet {__version__}")
-    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
-                                       parser_class=OneLineParser)
+    subparsers = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser
+    )
     spawn_command.add_parser(subparsers)
     models_command.add_parser(subparsers)
     return parser

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 
+from armfleet.cli.parser import OneLineParser
 from armfleet.description import ModelLibrary
 from armfleet.kinematics import ArmKinematics
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     parser = subparsers.add_parser("models", help="list the arm models and their DoF")
     parser.set_defaults(run=run)
 

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from types import FrameType
 
-from armfleet.cli.parser import UsageError
+from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.status_line import status_line
 from armfleet.description import ModelLibrary
 from armfleet.errors import UnknownModel
@@ -31,7 +31,7 @@ class ArmRequest:
     pose: SpawnPose
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     parser = subparsers.add_parser(
         "spawn",
         help="bring arms up one at a time in a new world and run it",
@@ -40,30 +40,51 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
     )
     parser.add_argument("names", nargs="+", metavar="NAME", help="arm names, e.g. bob toby")
     parser.add_argument(
-        "--at", nargs="+", metavar=AT_SYNTAX, required=True,
+        "--at",
+        nargs="+",
+        metavar=AT_SYNTAX,
+        required=True,
         help="spawn pose per name, in order [m, m, m, deg], e.g. --at 0,0 1,0,0,180",
     )
     parser.add_argument(
-        "--model", nargs="+", default=["panda"], metavar="MODEL",
+        "--model",
+        nargs="+",
+        default=["panda"],
+        metavar="MODEL",
         help="one model for all arms or one per name (default: panda; see 'armfleet models')",
     )
     parser.add_argument(
-        "--duration", type=float, default=None, metavar="S",
+        "--duration",
+        type=float,
+        default=None,
+        metavar="S",
         help="simulated seconds to run, then exit (default: until Ctrl-C)",
     )
     pacing = parser.add_mutually_exclusive_group()
     pacing.add_argument(
-        "--realtime", dest="realtime", action="store_true", default=True,
+        "--realtime",
+        dest="realtime",
+        action="store_true",
+        default=True,
         help="pace the simulation to the wall clock (default)",
     )
     pacing.add_argument(
         "--fast", dest="realtime", action="store_false", help="run as fast as possible"
     )
     parser.add_argument("--no-viewer", action="store_true", help="run headless")
-    parser.add_argument("--viewer-port", type=int, default=None, metavar="PORT",
-                        help="web port of the viewer (default: a free port)")
-    parser.add_argument("--record", metavar="RUN.html", default=None,
-                        help="save a standalone HTML replay of the run at exit")
+    parser.add_argument(
+        "--viewer-port",
+        type=int,
+        default=None,
+        metavar="PORT",
+        help="web port of the viewer (default: a free port)",
+    )
+    parser.add_argument(
+        "--record",
+        metavar="RUN.html",
+        default=None,
+        help="save a standalone HTML replay of the run at exit",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress or status lines")
     parser.set_defaults(run=run)
 
@@ -100,7 +121,10 @@ def run(args: argparse.Namespace) -> int:
     models = ModelLibrary()
     requests = parse_requests(args, models)
     viewer = not args.no_viewer or args.record is not None
-    say = (lambda _: None) if args.quiet else (lambda line: print(line, flush=True))
+
+    def say(line: str) -> None:
+        if not args.quiet:
+            print(line, flush=True)
 
     # SIGTERM ends the run like Ctrl-C: the world (and its viewer) close cleanly.
     def on_term(signum: int, frame: FrameType | None) -> None:

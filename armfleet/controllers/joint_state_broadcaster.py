@@ -26,7 +26,10 @@ class JointStateBroadcaster(Controller):
     def update(self, stamp: float) -> None:
         body = self.arm.body
         self.latest = JointState(
-            stamp, self._names, body.position.copy(), body.velocity.copy(),
+            stamp,
+            self._names,
+            body.position.copy(),
+            body.velocity.copy(),
             body.effort_command.copy(),
         )
         self.arm.bus.publish(self._topic, self.latest)

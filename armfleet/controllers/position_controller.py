@@ -21,7 +21,7 @@ from armfleet.controllers.controller import Controller
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
 from armfleet.controllers.parameters import ParameterSpec
 from armfleet.errors import ArmfleetError, JointLimitError, NonFiniteTarget, TargetLengthError
-from armfleet.messages import ControllerState, FloatArray, JointCommand
+from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
 
 logger = logging.getLogger("armfleet")
 
@@ -48,9 +48,9 @@ class PositionController(Controller):
         self.joint_names = tuple(kinematics.joint_names[i] for i in self._arm)
         self.lower = kinematics.lower[self._arm]
         self.upper = kinematics.upper[self._arm]
-        self.max_velocity = kinematics.velocity_limit[self._arm] * self.parameters[
-            "velocity_scaling"
-        ]
+        self.max_velocity = (
+            kinematics.velocity_limit[self._arm] * self.parameters["velocity_scaling"]
+        )
         self._kp = self.parameters["kp_s2"]
         self._kd = self.parameters["kd_s"]
         self._effort_limit = kinematics.effort_limit
@@ -95,11 +95,11 @@ class PositionController(Controller):
     def is_holding(self) -> bool:
         return not self.is_moving and self.tracking_error < self.parameters["hold_tolerance_rad"]
 
-    def validate(self, target: Sequence[float]) -> FloatArray:
+    def validate(self, target: Positions) -> FloatArray:
         """Return ``target`` as an array, or raise the error a user needs to fix it."""
         return check_target(self.arm.name, target, self.joint_names, self.lower, self.upper)
 
-    def set_target(self, target: Sequence[float]) -> float:
+    def set_target(self, target: Positions) -> float:
         """Plan a motion to ``target``; returns its duration [s]."""
         values = self.validate(target)
         if self.trajectory is None:
@@ -132,9 +132,14 @@ class PositionController(Controller):
             self.arm.bus.publish(
                 self._state_topic,
                 ControllerState(
-                    stamp, self.joint_names, trajectory.position.copy(),
-                    trajectory.velocity.copy(), trajectory.acceleration.copy(),
-                    q[arm].copy(), v[arm].copy(), trajectory.moving,
+                    stamp,
+                    self.joint_names,
+                    trajectory.position.copy(),
+                    trajectory.velocity.copy(),
+                    trajectory.acceleration.copy(),
+                    q[arm].copy(),
+                    v[arm].copy(),
+                    trajectory.moving,
                 ),
             )
         trajectory.advance()
@@ -142,7 +147,7 @@ class PositionController(Controller):
 
 def check_target(
     arm: str,
-    target: Sequence[float],
+    target: Positions,
     joint_names: Sequence[str],
     lower: FloatArray,
     upper: FloatArray,

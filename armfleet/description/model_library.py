@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import tempfile
 import xml.etree.ElementTree as ET
-from xml.dom import minidom
 from dataclasses import dataclass
 from pathlib import Path
+from xml.dom import minidom
 
 import xacro
 

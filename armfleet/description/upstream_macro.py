@@ -37,11 +37,11 @@ def prefixable_macro(urdf_text: str, macro_name: str, source: str) -> str:
         raise DescriptionError(f"upstream URDF {source} has root <{robot.tag}>, expected <robot>")
 
     for element in list(robot):
-        if element.tag in _DROPPED_TAGS:
-            robot.remove(element)
-        elif element.tag == "link" and element.get("name") == "world":
-            robot.remove(element)
-        elif element.tag == "joint" and _attr(element, "parent", "link") == "world":
+        if (
+            element.tag in _DROPPED_TAGS
+            or (element.tag == "link" and element.get("name") == "world")
+            or (element.tag == "joint" and _attr(element, "parent", "link") == "world")
+        ):
             robot.remove(element)
 
     def prefixed(name: str | None) -> str:
