@@ -93,9 +93,11 @@ class Arm:
         The command goes out on ``/<name>/position_controller/commands``.
 
         Raises:
-            TargetLengthError, NonFiniteTarget, JointLimitError: nothing is sent.
+            TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError:
+                nothing is sent and the current motion goes on.
         """
         values = self.position_controller.validate(positions)
+        self.position_controller.plan(values)
         self._bus.publish(
             f"{self.namespace}/position_controller/commands",
             JointCommand(tuple(float(v) for v in values)),

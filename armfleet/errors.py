@@ -79,6 +79,16 @@ class JointLimitError(ArmfleetError):
         )
 
 
+class MotionLimitError(ArmfleetError):
+    def __init__(self, arm: str, joint: str, value: float, lower: float, upper: float) -> None:
+        self.arm, self.joint = arm, joint
+        super().__init__(
+            f"{arm}: from its current motion the arm cannot reach this target without taking "
+            f"{joint} to {value:.6g}, outside its limits [{lower:.6g}, {upper:.6g}]; "
+            "wait for the motion to slow down or choose another target"
+        )
+
+
 class PoseError(ArmfleetError):
     """A spawn pose that cannot be parsed or is not finite."""
 

@@ -134,3 +134,26 @@ def test_bystander_does_not_move(tracked) -> None:
     positions = np.array([s.position for s in recording.bystander])
     assert len(positions) > 1000
     assert np.abs(positions - positions[0]).max() < BYSTANDER_MOTION_RAD
+
+
+def test_retarget_that_would_overshoot_a_limit_is_refused(world: armfleet.World) -> None:
+    """A re-plan whose braking would carry a joint past its limit is refused.
+
+    With the shipped limits a time-optimal re-plan brakes within the old plan's
+    envelope, so the case is built by moving the controller's lower limit of
+    joint 1 to just ahead of the arm while it rushes that way.
+    """
+    bob = world.spawn("bob")
+    target = bob.positions.copy()
+    target[0] -= 1.5
+    bob.move_to(target)
+    world.run(0.6)
+    controller = bob.position_controller
+    assert controller.trajectory is not None and controller.trajectory.velocity[0] < -1.0
+    here = controller.trajectory.position[0]
+    controller.lower[0] = here - 0.02  # braking from > 1 rad/s at 5 rad/s^2 needs > 0.1 rad
+    back = bob.positions.copy()
+    back[0] = here + 0.1
+    with pytest.raises(armfleet.ArmfleetError, match=r"bob_panda_joint1 to .* outside its limits"):
+        bob.move_to(back)
+    assert controller.is_moving  # the current motion goes on

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 import ruckig
 
@@ -11,6 +14,22 @@ from armfleet.messages import FloatArray
 
 class TrajectoryError(ArmfleetError):
     """Ruckig could not plan a motion (it reports why)."""
+
+
+@dataclass(frozen=True)
+class MotionPlan:
+    """A planned motion, checked before it is followed.
+
+    Attributes:
+        duration: time to reach the target [s].
+        position_min, position_max: per-joint extremes along the way.
+        input: the Ruckig input that produces it.
+    """
+
+    duration: float
+    position_min: FloatArray
+    position_max: FloatArray
+    input: Any
 
 
 class JerkLimitedTrajectory:
@@ -46,21 +65,35 @@ class JerkLimitedTrajectory:
     def moving(self) -> bool:
         return self._moving
 
-    def set_target(self, target: FloatArray) -> float:
-        """Plan from the current reference state to rest at ``target``; return its duration [s]."""
-        self._input.current_position = self.position.tolist()
-        self._input.current_velocity = self.velocity.tolist()
-        self._input.current_acceleration = self.acceleration.tolist()
-        self._input.target_position = [float(x) for x in target]
-        self._input.target_velocity = [0.0] * len(self.position)
-        self._input.target_acceleration = [0.0] * len(self.position)
-        self._moving = True
-        trajectory = ruckig.Trajectory(len(self.position))
-        result = self._otg.calculate(self._input, trajectory)
+    def plan(self, target: FloatArray) -> MotionPlan:
+        """Plan from the current reference state to rest at ``target``, without following it."""
+        dofs = len(self.position)
+        candidate = ruckig.InputParameter(dofs)
+        candidate.max_velocity = self._input.max_velocity
+        candidate.max_acceleration = self._input.max_acceleration
+        candidate.max_jerk = self._input.max_jerk
+        candidate.current_position = self.position.tolist()
+        candidate.current_velocity = self.velocity.tolist()
+        candidate.current_acceleration = self.acceleration.tolist()
+        candidate.target_position = [float(x) for x in target]
+        candidate.target_velocity = [0.0] * dofs
+        candidate.target_acceleration = [0.0] * dofs
+        trajectory = ruckig.Trajectory(dofs)
+        result = self._otg.calculate(candidate, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
-            self._moving = False
             raise TrajectoryError(f"Ruckig cannot plan this motion: {result}")
-        return float(trajectory.duration)
+        extrema = trajectory.position_extrema
+        return MotionPlan(
+            float(trajectory.duration),
+            np.array([e.min for e in extrema]),
+            np.array([e.max for e in extrema]),
+            candidate,
+        )
+
+    def follow(self, plan: MotionPlan) -> None:
+        """Start following ``plan`` (made by :meth:`plan` from the current state)."""
+        self._input = plan.input
+        self._moving = True
 
     def advance(self) -> None:
         """Move the reference one period along the planned motion."""

@@ -18,9 +18,15 @@ from collections.abc import Sequence
 import numpy as np
 
 from armfleet.controllers.controller import Controller
-from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
+from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory, MotionPlan
 from armfleet.controllers.parameters import ParameterSpec
-from armfleet.errors import ArmfleetError, JointLimitError, NonFiniteTarget, TargetLengthError
+from armfleet.errors import (
+    ArmfleetError,
+    JointLimitError,
+    MotionLimitError,
+    NonFiniteTarget,
+    TargetLengthError,
+)
 from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
 
 logger = logging.getLogger("armfleet")
@@ -100,11 +106,39 @@ class PositionController(Controller):
         return check_target(self.arm.name, target, self.joint_names, self.lower, self.upper)
 
     def set_target(self, target: Positions) -> float:
-        """Plan a motion to ``target``; returns its duration [s]."""
+        """Plan a motion to ``target`` and follow it; returns its duration [s]."""
+        plan = self.plan(target)
+        assert self.trajectory is not None  # plan() checked it
+        self.trajectory.follow(plan)
+        return plan.duration
+
+    def plan(self, target: Positions) -> MotionPlan:
+        """Plan a motion to ``target`` from the current reference, checked, not followed.
+
+        A target sent mid-motion is planned from the moving reference; if the
+        way there would overshoot a joint limit (the arm cannot stop in time),
+        it is refused and the current motion goes on.
+
+        Raises:
+            TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError.
+        """
         values = self.validate(target)
         if self.trajectory is None:
             raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
-        return self.trajectory.set_target(values)
+        plan = self.trajectory.plan(values)
+        for name, low, high, lower, upper in zip(
+            self.joint_names,
+            plan.position_min,
+            plan.position_max,
+            self.lower,
+            self.upper,
+            strict=True,
+        ):
+            if low < lower or high > upper:
+                raise MotionLimitError(
+                    self.arm.name, name, float(low if low < lower else high), lower, upper
+                )
+        return plan
 
     def _on_command(self, command: JointCommand) -> None:
         try:
