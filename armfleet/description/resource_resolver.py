@@ -13,7 +13,6 @@ from importlib import metadata
 from pathlib import Path
 
 from armfleet.errors import ResourceNotFound
-from armfleet.paths import data_dir
 
 _URI = re.compile(r"""(?P<quote>["'])(?P<uri>(?:package|file)://[^"']+)(?P=quote)""")
 
@@ -25,8 +24,7 @@ def default_share_dirs() -> list[Path]:
     """Share folders that hold ``<package>/...`` trees, in search order.
 
     ``$ARMFLEET_PACKAGE_PATH`` first, then the ``share`` folder of the installed
-    example-robot-data (a cmeel package: ``<site-packages>/cmeel.prefix/share``),
-    then armfleet's own data (so ``package://armfleet/description/...`` works).
+    example-robot-data (a cmeel package: ``<site-packages>/cmeel.prefix/share``).
     """
     dirs = [Path(p) for p in os.environ.get(PACKAGE_PATH_ENV, "").split(os.pathsep) if p]
     try:
@@ -34,8 +32,6 @@ def default_share_dirs() -> list[Path]:
         dirs.append(Path(str(share)))
     except metadata.PackageNotFoundError:
         pass
-    armfleet_root = data_dir("description").parent
-    dirs.append(armfleet_root.parent if armfleet_root.name == "_data" else armfleet_root)
     return dirs
 
 
