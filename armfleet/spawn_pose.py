@@ -1,4 +1,4 @@
-"""Where an arm's ``base_link`` sits in the world: x, y, z [m] and yaw [deg]."""
+"""Where an arm's ``base_link`` sits in the world: x, y, z [m], yaw (and roll, pitch) [deg]."""
 
 from __future__ import annotations
 
@@ -21,15 +21,23 @@ class SpawnPose:
     Attributes:
         x, y, z: position of ``<name>_base_link`` [m].
         yaw_deg: rotation about the world z axis [deg].
+        roll_deg, pitch_deg: rotations about x and y [deg] (URDF ``rpy``: the
+            orientation is Rz(yaw) Ry(pitch) Rx(roll)), for wall or ceiling mounts.
     """
 
     x: float = 0.0
     y: float = 0.0
     z: float = 0.0
     yaw_deg: float = 0.0
+    roll_deg: float = 0.0
+    pitch_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        for field, value in (("x", self.x), ("y", self.y), ("z", self.z), ("yaw", self.yaw_deg)):
+        fields = (
+            ("x", self.x), ("y", self.y), ("z", self.z),
+            ("yaw", self.yaw_deg), ("roll", self.roll_deg), ("pitch", self.pitch_deg),
+        )  # fmt: skip
+        for field, value in fields:
             if not math.isfinite(value):
                 raise PoseError(f"spawn pose {field} is {value}; it must be a finite number")
 
@@ -66,12 +74,29 @@ class SpawnPose:
     def yaw_rad(self) -> float:
         return math.radians(self.yaw_deg)
 
+    @property
+    def rpy_rad(self) -> tuple[float, float, float]:
+        """(roll, pitch, yaw) [rad], as in a URDF ``<origin rpy=...>``."""
+        return (math.radians(self.roll_deg), math.radians(self.pitch_deg), self.yaw_rad)
+
     def matrix(self) -> npt.NDArray[np.float64]:
         """4x4 homogeneous transform world -> base_link."""
-        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
-        return np.array(
-            [[c, -s, 0.0, self.x], [s, c, 0.0, self.y], [0.0, 0.0, 1.0, self.z], [0, 0, 0, 1.0]]
-        )
+        roll, pitch, yaw = self.rpy_rad
+        cr, sr = math.cos(roll), math.sin(roll)
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+        ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+        rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+        matrix = np.eye(4)
+        matrix[:3, :3] = rz @ ry @ rx
+        matrix[:3, 3] = (self.x, self.y, self.z)
+        return matrix
 
     def __str__(self) -> str:
-        return f"({self.x:g}, {self.y:g}, {self.z:g}, yaw {self.yaw_deg:g} deg)"
+        tilt = f", roll {self.roll_deg:g}, pitch {self.pitch_deg:g}" if self.tilted else ""
+        return f"({self.x:g}, {self.y:g}, {self.z:g}, yaw {self.yaw_deg:g} deg{tilt})"
+
+    @property
+    def tilted(self) -> bool:
+        return self.roll_deg != 0.0 or self.pitch_deg != 0.0

@@ -15,7 +15,12 @@ SPAWN_POSES = [
     (1.0, -0.5, 0.0, 90.0),
     (-0.7, 0.4, 0.3, 0.0),
     (0.25, 2.0, 0.3, -135.0),
+    armfleet.SpawnPose(0.5, -1.0, 1.0, 45.0, roll_deg=90.0, pitch_deg=10.0),  # wall mount
 ]
+
+
+def pose_id(at: object) -> str:
+    return "at" + str(armfleet.SpawnPose.from_values(at)).replace(" ", "")  # type: ignore[arg-type]
 
 
 def random_configuration(arm: armfleet.Arm, seed: int) -> np.ndarray:
@@ -25,11 +30,11 @@ def random_configuration(arm: armfleet.Arm, seed: int) -> np.ndarray:
 
 
 @pytest.mark.parametrize("model", ["panda", "ur5"])
-@pytest.mark.parametrize("at", SPAWN_POSES, ids=lambda at: "at" + "_".join(map(str, at)))
+@pytest.mark.parametrize("at", SPAWN_POSES, ids=pose_id)
 def test_link_poses_agree(model: str, at: tuple[float, ...]) -> None:
     with armfleet.World() as world:
         arm = world.spawn("bob", model=model, at=at)
-        arm.move_to(random_configuration(arm, seed=len(at)))
+        arm.move_to(random_configuration(arm, seed=SPAWN_POSES.index(at)))
         world.run(0.3)  # mid-motion, joints away from home and moving
         assert arm.is_moving
         links = arm.body.link_names
@@ -43,7 +48,7 @@ def test_link_poses_agree(model: str, at: tuple[float, ...]) -> None:
             assert np.abs(from_tf - from_pinocchio).max() < POSE_TOLERANCE, link
 
 
-@pytest.mark.parametrize("at", SPAWN_POSES, ids=lambda at: "at" + "_".join(map(str, at)))
+@pytest.mark.parametrize("at", SPAWN_POSES, ids=pose_id)
 def test_static_transform_carries_the_spawn_pose(world: armfleet.World, at) -> None:
     statics: list[TFMessage] = []
     world.bus.subscribe("/tf_static", statics.append)

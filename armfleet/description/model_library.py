@@ -101,7 +101,7 @@ class ModelLibrary:
             mappings = {
                 "prefix": prefix,
                 "xyz": f"{pose.x!r} {pose.y!r} {pose.z!r}",
-                "rpy": f"0 0 {pose.yaw_rad!r}",
+                "rpy": " ".join(repr(angle) for angle in pose.rpy_rad),
                 "upstream_macro": str(macro_path),
             }
             try:
