@@ -6,6 +6,7 @@ import logging
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -21,6 +22,7 @@ from armfleet.controllers import (
     PositionController,
 )
 from armfleet.controllers.position_controller import check_target
+from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, BringupError, DescriptionError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
@@ -140,6 +142,7 @@ class World:
         *,
         initial_positions: Positions | None = None,
         parameters: ControllerOverrides | None = None,
+        parameter_files: Mapping[str, Path] | None = None,
     ) -> Arm:
         """Bring an arm up, stage by stage, and return it once ready.
 
@@ -154,6 +157,8 @@ class World:
             initial_positions: arm joint positions at spawn; the model's home by default.
             parameters: per-controller parameter overrides for this arm only,
                 e.g. ``{"position_controller": {"kp_s2": 900.0}}``.
+            parameter_files: per-controller parameter file for this arm; the
+                shipped ``controllers/<type>.yaml`` by default.
 
         Raises:
             ArmfleetError: bad name, model, pose or positions; the world is unchanged.
@@ -161,11 +166,11 @@ class World:
         self._check_open()
         check_arm_name(name, self._arms)
         pose = SpawnPose.from_values(at)
-        unknown = set(parameters or {}) - {"joint_state_broadcaster", "position_controller"}
+        unknown = (set(parameters or {}) | set(parameter_files or {})) - set(CONTROLLER_TYPES)
         if unknown:
             raise ArmfleetError(
                 f"parameters for unknown controllers {', '.join(sorted(unknown))}; "
-                "valid: joint_state_broadcaster, position_controller"
+                f"valid: {', '.join(CONTROLLER_TYPES)}"
             )
         description = self._models.expand(model, f"{name}_", pose)
         kinematics = ArmKinematics(description.urdf, description.tool0)
@@ -177,11 +182,17 @@ class World:
             body.reset(start)
             context = ArmContext(name, body, kinematics, self._bus, self._dt)
             manager = ControllerManager(name)
-            overrides = parameters or {}
+            overrides, files = parameters or {}, parameter_files or {}
             broadcaster = JointStateBroadcaster(
-                context, overrides=overrides.get("joint_state_broadcaster")
+                context,
+                files.get(JointStateBroadcaster.type_name),
+                overrides.get(JointStateBroadcaster.type_name),
             )
-            controller = PositionController(context, overrides=overrides.get("position_controller"))
+            controller = PositionController(
+                context,
+                files.get(PositionController.type_name),
+                overrides.get(PositionController.type_name),
+            )
             manager.load(broadcaster)
             manager.load(controller)
             # Validate both parameter sets before the arm joins the world.

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 
 from armfleet import __version__
-from armfleet.cli import models_command, spawn_command
+from armfleet.cli import launch_command, models_command, spawn_command
 from armfleet.cli.parser import OneLineParser, UsageError, fail
 from armfleet.errors import ArmfleetError
 
@@ -19,6 +19,7 @@ def build_parser() -> OneLineParser:
         dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser
     )
     spawn_command.add_parser(subparsers)
+    launch_command.add_parser(subparsers)
     models_command.add_parser(subparsers)
     return parser
 

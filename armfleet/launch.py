@@ -1,0 +1,62 @@
+"""From a :class:`FleetSpec` to a running world: the one path for ``launch`` and ``spawn``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from armfleet.arm import Arm
+from armfleet.spec import FleetSpec, load_spec
+from armfleet.spec.fleet_spec import ArmSpec
+from armfleet.world import World
+
+
+def spawn_from_spec(world: World, arm: ArmSpec) -> Arm:
+    """Bring up one arm of a spec in ``world``."""
+    return world.spawn(
+        arm.name,
+        arm.model,
+        arm.pose,
+        initial_positions=arm.initial_positions,
+        parameters={name: c.parameters for name, c in arm.controllers.items()},
+        parameter_files={name: c.file for name, c in arm.controllers.items() if c.file},
+    )
+
+
+def launch(
+    spec: FleetSpec | str | Path,
+    *,
+    viewer: bool | None = None,
+    viewer_port: int | None = None,
+    before_spawn: Callable[[World], None] | None = None,
+) -> World:
+    """Create the spec's world and bring its arms up one at a time.
+
+    Args:
+        spec: a spec, or a spec file (path or name of a shipped spec).
+        viewer: override the spec's ``world.viewer``.
+        viewer_port: web port of the viewer.
+        before_spawn: called with the new world before the first arm comes up
+            (e.g. to subscribe to ``/bringup``).
+
+    Returns:
+        The world with every arm ready; close it when done.
+    """
+    if not isinstance(spec, FleetSpec):
+        spec = load_spec(spec)
+    settings = spec.world
+    world = World(
+        dt=settings.dt_s,
+        gravity=settings.gravity_m_s2,
+        viewer=settings.viewer if viewer is None else viewer,
+        viewer_port=viewer_port,
+    )
+    try:
+        if before_spawn is not None:
+            before_spawn(world)
+        for arm in spec.arms:
+            spawn_from_spec(world, arm)
+    except BaseException:
+        world.close()
+        raise
+    return world

@@ -1,0 +1,87 @@
+"""Checks across a spec's arms: names, models, overlaps, joint limits, controller parameters.
+
+They use the same checks as :meth:`armfleet.World.spawn`, so a spec that passes
+``armfleet launch --check`` brings up without a surprise.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import NoReturn
+
+from armfleet.controllers.parameters import load_parameters
+from armfleet.controllers.position_controller import check_target
+from armfleet.controllers.registry import CONTROLLER_TYPES
+from armfleet.description import ModelLibrary
+from armfleet.errors import ArmfleetError
+from armfleet.kinematics import ArmKinematics
+from armfleet.names import check_arm_name
+from armfleet.spec.fleet_spec import ArmSpec
+from armfleet.spec.located_yaml import LocatedDict
+from armfleet.spec.spec_reader import SpecReader
+
+#: Bases closer than this (and at similar heights) would stand inside each other [m].
+MIN_BASE_SEPARATION_M = 0.25
+
+LocatedArm = tuple[ArmSpec, LocatedDict, str]
+
+
+def check_fleet(
+    reader: SpecReader, arms: Sequence[LocatedArm], models: ModelLibrary | None = None
+) -> None:
+    """Raise :class:`SpecError` at the first arm that cannot be brought up as specified."""
+    models = models or ModelLibrary()
+    available = models.names
+    limits: dict[str, ArmKinematics] = {}
+    seen: dict[str, ArmSpec] = {}
+    for arm, entry, field in arms:
+
+        def fail(
+            key: str, problem: str, entry: LocatedDict = entry, field: str = field
+        ) -> NoReturn:
+            raise reader.error(entry.line_of(key), f"{field}.{key}", problem)
+
+        try:
+            check_arm_name(arm.name)
+        except ArmfleetError as exc:
+            fail("name", str(exc))
+        if arm.name in seen:
+            fail("name", f"arm name {arm.name!r} is used twice; names must be unique")
+        if arm.model not in available:
+            fail("model", f"model {arm.model!r} not found; available: {', '.join(available)}")
+        for other in seen.values():
+            distance = math.dist((arm.pose.x, arm.pose.y), (other.pose.x, other.pose.y))
+            if distance < MIN_BASE_SEPARATION_M and abs(arm.pose.z - other.pose.z) < 0.3:
+                fail(
+                    "at_m" if "at_m" in entry else "spacing_m",
+                    f"base of {arm.name} is {distance:.3f} m from {other.name}'s; bases must be "
+                    f">= {MIN_BASE_SEPARATION_M} m apart",
+                )
+        seen[arm.name] = arm
+        if arm.initial_positions is not None:
+            if arm.model not in limits:
+                description = models.expand(arm.model, "")
+                limits[arm.model] = ArmKinematics(description.urdf, description.tool0)
+            kinematics = limits[arm.model]
+            chain = kinematics.arm_indices
+            try:
+                check_target(
+                    arm.name,
+                    arm.initial_positions,
+                    [f"{arm.name}_{kinematics.joint_names[i]}" for i in chain],
+                    kinematics.lower[chain],
+                    kinematics.upper[chain],
+                )
+            except ArmfleetError as exc:
+                fail("initial_positions", str(exc))
+        for controller, config in arm.controllers.items():
+            try:
+                load_parameters(
+                    controller,
+                    CONTROLLER_TYPES[controller].parameter_schema,
+                    config.file,
+                    config.parameters,
+                )
+            except ArmfleetError as exc:
+                fail("controllers", str(exc))

@@ -1,0 +1,73 @@
+"""What a world and its arms are made of, whether typed on a command line or read from YAML."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from armfleet.spawn_pose import SpawnPose
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """One controller of one arm.
+
+    Attributes:
+        file: its parameter file; None for the shipped ``controllers/<type>.yaml``.
+        parameters: overrides for this arm only, on top of the file.
+    """
+
+    file: Path | None = None
+    parameters: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ArmSpec:
+    """One arm to bring up.
+
+    Attributes:
+        name: arm name, namespace and prefix.
+        model: one of the models in ``description/``.
+        pose: spawn pose of ``<name>_base_link``.
+        initial_positions: arm joint positions at spawn [rad or m]; the model's home if None.
+        controllers: per controller type (``position_controller``, ...), its configuration.
+    """
+
+    name: str
+    model: str = "panda"
+    pose: SpawnPose = field(default_factory=SpawnPose)
+    initial_positions: tuple[float, ...] | None = None
+    controllers: Mapping[str, ControllerConfig] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class WorldSpec:
+    """World settings.
+
+    Attributes:
+        dt_s: physics step [s].
+        gravity_m_s2: gravitational acceleration along -z [m/s^2].
+        realtime: pace the run to the wall clock.
+        viewer: start the MeshCat viewer.
+    """
+
+    dt_s: float = 0.001
+    gravity_m_s2: float = 9.81
+    realtime: bool = True
+    viewer: bool = True
+
+
+@dataclass(frozen=True)
+class FleetSpec:
+    """A world and the arms to bring up in it, in order.
+
+    Attributes:
+        world: world settings.
+        arms: arms in bring-up order.
+        source: where the spec came from (a file path or ``"command line"``).
+    """
+
+    world: WorldSpec = field(default_factory=WorldSpec)
+    arms: tuple[ArmSpec, ...] = ()
+    source: str = "<python>"
