@@ -12,6 +12,7 @@ import_quietly()
 from armfleet.arm import Arm
 from armfleet.bus import Bus
 from armfleet.errors import ArmfleetError
+from armfleet.launch import launch
 from armfleet.messages import (
     BringupEvent,
     BringupStage,
@@ -22,6 +23,7 @@ from armfleet.messages import (
     TransformStamped,
 )
 from armfleet.spawn_pose import SpawnPose
+from armfleet.spec import FleetSpec, SpecError, load_spec
 from armfleet.world import World
 
 __version__ = "0.1.0"
@@ -33,11 +35,15 @@ __all__ = [
     "BringupStage",
     "Bus",
     "ControllerState",
+    "FleetSpec",
     "JointCommand",
     "JointState",
     "SpawnPose",
+    "SpecError",
     "TFMessage",
     "TransformStamped",
     "World",
     "__version__",
+    "launch",
+    "load_spec",
 ]

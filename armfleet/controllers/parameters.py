@@ -17,6 +17,7 @@ from typing import Any
 import yaml
 
 from armfleet.errors import ParameterError
+from armfleet.located_yaml import LocatedDict, load_located
 from armfleet.paths import data_dir
 
 
@@ -57,36 +58,56 @@ def load_parameters(
         ParameterError: unknown key (with a "did you mean"), wrong type or out of bounds.
     """
     path = path or controller_file(controller)
+    if not path.is_file():
+        raise ParameterError(f"{path}: controller parameter file not found")
     try:
-        document = yaml.safe_load(path.read_text()) if path.is_file() else {}
+        document = load_located(path.read_text())
     except yaml.YAMLError as exc:
-        raise ParameterError(f"{path}: not valid YAML: {exc}") from None
-    section = (document or {}).get(controller, {}) if isinstance(document, dict) else None
-    if not isinstance(section, dict):
-        raise ParameterError(f"{path}: expected a mapping under '{controller}:'")
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+        raise ParameterError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+    if not isinstance(document, LocatedDict) or controller not in document:
+        found = ", ".join(document) if isinstance(document, LocatedDict) else "nothing"
+        raise ParameterError(f"{path}: no '{controller}:' section (found: {found})")
+    section = document[controller]
+    if not isinstance(section, LocatedDict):
+        line = document.line_of(controller)
+        raise ParameterError(
+            f"{path}:{line}: expected parameters as a mapping under '{controller}:'"
+        )
     values = {spec.name: spec.default for spec in schema}
-    for source, given in ((str(path), section), ("override", overrides or {})):
-        for key, value in given.items():
-            values[key] = _check(controller, source, schema, key, value)
+    for key, value in section.items():
+        values[key] = _check(controller, f"{path}:{section.line_of(key)}", schema, key, value)
+    for key, value in (overrides or {}).items():
+        values[key] = _check(controller, "override", schema, key, value)
     return values
 
 
 def _check(
     controller: str, source: str, schema: Sequence[ParameterSpec], key: str, value: Any
 ) -> float:
+    try:
+        return check_parameter(controller, schema, key, value)
+    except ParameterError as exc:
+        raise ParameterError(f"{source}: {exc}") from None
+
+
+def check_parameter(
+    controller: str, schema: Sequence[ParameterSpec], key: str, value: Any
+) -> float:
+    """Return ``value`` as a float if ``key`` is a parameter of ``schema`` and fits it."""
     specs = {spec.name: spec for spec in schema}
     spec = specs.get(key)
     if spec is None:
         close = difflib.get_close_matches(key, specs, n=1)
         hint = f"did you mean '{close[0]}'? " if close else ""
         raise ParameterError(
-            f"{source}: unknown {controller} parameter '{key}'; {hint}"
-            f"valid: {', '.join(sorted(specs))}"
+            f"unknown {controller} parameter '{key}'; {hint}valid: {', '.join(sorted(specs))}"
         )
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise ParameterError(f"{source}: {controller}.{key} = {value!r} must be a finite number")
+        raise ParameterError(f"{controller}.{key} = {value!r} must be a finite number")
     if not spec.lower <= value <= spec.upper:
         raise ParameterError(
-            f"{source}: {controller}.{key} = {value} is outside [{spec.lower:g}, {spec.upper:g}]"
+            f"{controller}.{key} = {value} is outside [{spec.lower:g}, {spec.upper:g}]"
         )
     return float(value)

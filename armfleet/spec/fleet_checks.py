@@ -16,9 +16,9 @@ from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError
 from armfleet.kinematics import ArmKinematics
+from armfleet.located_yaml import LocatedDict
 from armfleet.names import check_arm_name
 from armfleet.spec.fleet_spec import ArmSpec
-from armfleet.spec.located_yaml import LocatedDict
 from armfleet.spec.spec_reader import SpecReader
 
 #: Bases closer than this (and at similar heights) would stand inside each other [m].
@@ -83,5 +83,5 @@ def check_fleet(
                     config.file,
                     config.parameters,
                 )
-            except ArmfleetError as exc:
+            except ArmfleetError as exc:  # a problem inside the controller file
                 fail("controllers", str(exc))

@@ -27,16 +27,17 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
 
 import yaml
 
+from armfleet.controllers.parameters import check_parameter
 from armfleet.controllers.registry import CONTROLLER_TYPES
+from armfleet.errors import ParameterError
+from armfleet.located_yaml import LocatedDict, load_located
 from armfleet.paths import data_dir
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
-from armfleet.spec.located_yaml import LocatedDict, load_located
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 
@@ -164,12 +165,16 @@ def _controllers(
         file = None
         if "file" in config:
             file = _controller_file(reader, config, path, base_dir)
-        parameters: dict[str, Any] = {}
+        parameters: dict[str, float] = {}
         if "parameters" in config:
-            given = reader.mapping(
-                config["parameters"], f"{path}.parameters", config.line_of("parameters")
-            )
-            parameters = dict(given)
+            where = f"{path}.parameters"
+            given = reader.mapping(config["parameters"], where, config.line_of("parameters"))
+            schema = CONTROLLER_TYPES[controller].parameter_schema
+            for key, value in given.items():
+                try:
+                    parameters[key] = check_parameter(controller, schema, key, value)
+                except ParameterError as exc:
+                    raise reader.error(given.line_of(key), f"{where}.{key}", str(exc)) from None
         configs[controller] = ControllerConfig(file, parameters)
     return configs
 

@@ -7,7 +7,7 @@ import math
 from collections.abc import Collection, Sequence
 from typing import Any
 
-from armfleet.spec.located_yaml import LocatedDict, LocatedList
+from armfleet.located_yaml import LocatedDict, LocatedList
 from armfleet.spec.spec_error import SpecError
 
 _MISSING = object()
@@ -36,7 +36,9 @@ class SpecReader:
         """Reject keys not in ``allowed``, suggesting the closest valid one."""
         for key in mapping:
             if key not in allowed:
-                close = difflib.get_close_matches(key, allowed, n=1, cutoff=0.5)
+                # A key missing only its unit ("yaw" for "yaw_deg") gets the first unit offered.
+                with_unit = [name for name in allowed if name.startswith(f"{key}_")]
+                close = with_unit or difflib.get_close_matches(key, allowed, n=1, cutoff=0.5)
                 hint = f"did you mean '{close[0]}'? " if close else ""
                 raise self.error(
                     mapping.line_of(key),

@@ -1,0 +1,244 @@
+"""Launch specs: shipped files run, bad specs fail at their line, parameters stay per arm."""
+
+from __future__ import annotations
+
+import argparse
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import armfleet
+from armfleet.cli.spawn_command import spec_from_arguments
+from armfleet.controllers.parameters import controller_file, load_parameters
+from armfleet.controllers.registry import CONTROLLER_TYPES
+from armfleet.launch import launch
+from armfleet.paths import data_dir
+from armfleet.spec import FleetSpec, SpecError, load_spec, parse_spec
+
+SHIPPED_SPECS = sorted(data_dir("launch_specs").glob("*.yaml"))
+SHIPPED_CONTROLLER_FILES = sorted(data_dir("controllers").glob("*.yaml"))
+
+
+def test_every_spec_and_controller_file_is_shipped() -> None:
+    assert {p.stem for p in SHIPPED_SPECS} >= {"bob_and_toby", "mixed_cell", "grid_30"}
+    assert {p.stem for p in SHIPPED_CONTROLLER_FILES} >= set(CONTROLLER_TYPES)
+
+
+@pytest.mark.parametrize("path", SHIPPED_SPECS, ids=lambda p: p.stem)
+def test_shipped_spec_validates_and_runs(path: Path) -> None:
+    spec = load_spec(path)
+    world = launch(spec, viewer=False)
+    try:
+        assert list(world.arms) == [arm.name for arm in spec.arms]
+        for arm in spec.arms:
+            expected = arm.pose.matrix()
+            assert np.abs(world.tf.lookup("world", f"{arm.name}_base_link") - expected).max() < 1e-9
+        world.run(0.5)
+        for arm in world.arms.values():
+            assert arm.position_controller.is_holding, arm.name
+    finally:
+        world.close()
+
+
+@pytest.mark.parametrize("path", SHIPPED_CONTROLLER_FILES, ids=lambda p: p.stem)
+def test_shipped_controller_file_validates_and_runs(path: Path) -> None:
+    (controller,) = [name for name in CONTROLLER_TYPES if path.read_text().count(f"{name}:")]
+    load_parameters(controller, CONTROLLER_TYPES[controller].parameter_schema, path)
+    with armfleet.World() as world:
+        arm = world.spawn("bob", parameter_files={controller: path})
+        arm.move_to(arm.positions + 0.1)
+        world.run(0.5)
+        assert arm.position_controller.tracking_error < 1e-3
+
+
+def test_bob_and_toby_face_each_other() -> None:
+    bob, toby = load_spec("bob_and_toby").arms
+    assert (bob.pose.x, toby.pose.x) == (0.0, 1.0)
+    assert abs(toby.pose.yaw_deg - bob.pose.yaw_deg) == 180.0
+
+
+def test_grid_30_names_and_spacing() -> None:
+    arms = load_spec("grid_30").arms
+    assert len(arms) == 30
+    assert arms[0].name == "arm0_0" and arms[-1].name == "arm4_5"
+    assert (arms[-1].pose.x, arms[-1].pose.y) == (4.0, 5.0)
+
+
+def spec_text(body: str) -> str:
+    return textwrap.dedent(body).strip() + "\n"
+
+
+BOB = "  - name: bob\n    model: panda\n"
+BAD_SPECS = {
+    "yaml syntax": ("world:\n\tdt_s: 0.001\n", 2, "not valid YAML"),
+    "unknown top key": ("arm:\n" + BOB, 1, "did you mean 'arms'"),
+    "arms not a list": ("arms: {name: bob}\n", 1, "expected a list"),
+    "dt out of range": ("world:\n  dt_s: 0.5\narms:\n" + BOB, 2, "outside [1e-05, 0.1]"),
+    "dt without unit": ("world:\n  dt: 0.001\n", 2, "did you mean 'dt_s'"),
+    "realtime not bool": ("world:\n  realtime: maybe\n", 2, "expected true or false"),
+    "missing name": ("arms:\n  - model: panda\n", 2, "arms[0].name: required"),
+    "malformed name": ("arms:\n  - name: Bob\n    model: panda\n", 2, "^[a-z][a-z0-9_]*$"),
+    "duplicate name": ("arms:\n" + BOB + BOB.replace("  - ", "  - ") + "    at_m: [2, 0]\n", 4,
+                       "used twice"),
+    "unknown model": ("arms:\n  - name: bob\n    model: pand\n", 3, "available: panda, ur5"),
+    "yaw without unit": ("arms:\n" + BOB + "    yaw: 90\n", 4, "did you mean 'yaw_deg'"),
+    "at wrong length": ("arms:\n" + BOB + "    at_m: [1]\n", 4, "expected 2 or 3 numbers [m]"),
+    "two orientations": ("arms:\n" + BOB + "    yaw_deg: 90\n    rpy_deg: [0, 0, 90]\n", 5,
+                         "not both yaw_deg and rpy_deg"),
+    "overlapping bases": ("arms:\n" + BOB + "  - name: toby\n    model: panda\n"
+                          "    at_m: [0.1, 0.05]\n", 6, "bases must be >= 0.25 m apart"),
+    "initial positions length": ("arms:\n" + BOB + "    initial_positions: [0, 0]\n", 4,
+                                 "expected 7"),
+    "initial position out of limits": (
+        "arms:\n" + BOB + "    initial_positions: [0, 0, 0, 0, 0, 1, 0]\n", 4,
+        "bob_panda_joint4 is outside its limits",
+    ),
+    "unknown controller": ("arms:\n" + BOB + "    controllers:\n      velocity_controller: {}\n",
+                           5, "valid keys: joint_state_broadcaster, position_controller"),
+    "missing controller file": (
+        "arms:\n" + BOB + "    controllers:\n      position_controller:\n"
+        "        file: nope.yaml\n", 6, "shipped: ",
+    ),
+    "unknown parameter": (
+        "arms:\n" + BOB + "    controllers:\n      position_controller:\n"
+        "        parameters: {max_jerk: 5}\n", 6, "did you mean 'max_jerk_rad_s3'",
+    ),
+    "parameter out of bounds": (
+        "arms:\n" + BOB + "    controllers:\n      position_controller:\n"
+        "        parameters: {velocity_scaling: 2.0}\n", 6, "outside [0.01, 1]",
+    ),
+    "grid rows not whole": ("grid:\n  rows: 2.5\n  columns: 2\n  spacing_m: 1\n  model: panda\n",
+                            2, "not a whole number"),
+    "grid too dense": ("grid:\n  rows: 2\n  columns: 2\n  spacing_m: 0.1\n  model: panda\n", 4,
+                       "bases must be >= 0.25 m apart"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", BAD_SPECS, ids=list(BAD_SPECS))
+def test_bad_spec_gives_file_line_field_and_choices(case: str) -> None:
+    text, line, expected = BAD_SPECS[case]
+    with pytest.raises(SpecError) as raised:
+        parse_spec(text, "cell.yaml")
+    message = str(raised.value)
+    print(message)
+    assert "\n" not in message
+    assert message.startswith(f"cell.yaml:{line}: "), message
+    assert expected in message
+
+
+def test_spec_errors_cover_at_least_twelve_classes() -> None:
+    assert len(BAD_SPECS) >= 12
+
+
+def test_bad_spec_on_the_command_line(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    bad = tmp_path / "cell.yaml"
+    bad.write_text("arms:\n  - name: bob\n    model: pand\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "armfleet.cli.main", "launch", str(bad), "--check"],
+        capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert result.returncode == 2
+    assert result.stderr.strip().count("\n") == 0
+    assert f"{bad}:3: arms[0].model: model 'pand' not found" in result.stderr
+    ok = subprocess.run(
+        [sys.executable, "-m", "armfleet.cli.main", "launch", "grid_30", "--check"],
+        capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert ok.returncode == 0 and "30 arm(s)" in ok.stdout
+
+
+def test_parameters_are_per_arm(tmp_path: Path) -> None:
+    """toby's file halves the velocity scaling and acceleration: the same move takes
+    longer on toby, as Ruckig predicts for each arm, and bob keeps the shipped values."""
+    slow = tmp_path / "slow.yaml"
+    slow.write_text(
+        "position_controller:\n  velocity_scaling: 0.475\n  max_acceleration_rad_s2: 2.5\n"
+    )
+    spec = parse_spec(
+        spec_text(f"""
+            world: {{viewer: false}}
+            arms:
+              - {{name: bob, model: panda, at_m: [0, 0]}}
+              - name: toby
+                model: panda
+                at_m: [1, 0]
+                controllers:
+                  position_controller: {{file: {slow}}}
+        """),
+        "per_arm.yaml",
+    )
+    shipped = load_parameters(
+        "position_controller",
+        CONTROLLER_TYPES["position_controller"].parameter_schema,
+        controller_file("position_controller"),
+    )
+    world = launch(spec)
+    try:
+        bob, toby = world.arm("bob"), world.arm("toby")
+        assert bob.position_controller.parameters == shipped
+        assert toby.position_controller.parameters["velocity_scaling"] == 0.475
+        assert toby.position_controller.parameters["max_acceleration_rad_s2"] == 2.5
+        durations = {}
+        for arm in (bob, toby):
+            target = arm.positions + 1.2
+            predicted = arm.position_controller.plan(target).duration
+            arm.move_to(target)
+            start = world.time
+            while arm.is_moving:
+                world.step()
+            durations[arm.name] = (world.time - start, predicted)
+        for measured, predicted in durations.values():
+            assert abs(measured - predicted) <= 2 * world.dt
+        # Jerk-limited profiles don't scale linearly with the limits; measurably longer.
+        assert durations["toby"][0] > durations["bob"][0] + 0.3
+    finally:
+        world.close()
+
+
+def test_spawn_arguments_and_the_equivalent_spec_give_identical_worlds(tmp_path: Path) -> None:
+    args = argparse.Namespace(names=["bob", "toby"], at=["0,0", "1,0,0,180"], model=["panda"])
+    from_cli = spec_from_arguments(args, armfleet.World().models)
+    from_file = parse_spec(
+        spec_text("""
+            arms:
+              - {name: bob, model: panda, at_m: [0, 0]}
+              - {name: toby, model: panda, at_m: [1, 0, 0], yaw_deg: 180}
+        """),
+        "same.yaml",
+    )
+    assert from_cli.arms == from_file.arms
+    worlds = [launch(FleetSpec(from_file.world, spec.arms), viewer=False)
+              for spec in (from_cli, from_file)]  # fmt: skip
+    try:
+        first, second = worlds
+        for name in ("bob", "toby"):
+            a, b = first.arm(name), second.arm(name)
+            assert a.kinematics.frame_names == b.kinematics.frame_names
+            assert a.position_controller.parameters == b.position_controller.parameters
+            assert a.broadcaster.parameters == b.broadcaster.parameters
+            for frame in a.kinematics.frame_names:
+                assert np.abs(first.tf.lookup("world", frame)
+                              - second.tf.lookup("world", frame)).max() < 1e-12  # fmt: skip
+    finally:
+        for world in worlds:
+            world.close()
+
+
+def test_problem_inside_a_controller_file_names_that_file_and_line(tmp_path: Path) -> None:
+    params = tmp_path / "mine.yaml"
+    params.write_text("position_controller:\n  kp_s2: 900\n  kd: 60\n")
+    spec = tmp_path / "cell.yaml"
+    spec.write_text(
+        "arms:\n  - name: bob\n    model: panda\n    controllers:\n"
+        "      position_controller: {file: mine.yaml}\n"
+    )
+    with pytest.raises(SpecError) as raised:
+        load_spec(spec)
+    message = str(raised.value)
+    assert message.startswith(f"{spec}:4: arms[0].controllers: {params.resolve()}:3: ")
+    assert "did you mean 'kd_s'" in message
