@@ -41,6 +41,19 @@ class Subscription:
             self._bus = None
 
 
+@dataclass(eq=False)
+class Tap:
+    """Handle returned by :meth:`Bus.subscribe_all`; call :meth:`cancel` to stop."""
+
+    callback: Callable[[str, Any], None]
+    _bus: Bus | None = field(repr=False, default=None)
+
+    def cancel(self) -> None:
+        if self._bus is not None and self in self._bus._taps:
+            self._bus._taps.remove(self)
+        self._bus = None
+
+
 class Bus:
     """Topics of one world."""
 
@@ -48,6 +61,7 @@ class Bus:
         self._subscriptions: dict[str, list[Subscription]] = defaultdict(list)
         self._types: dict[str, type] = {}
         self._latched: dict[str, list[Any]] = defaultdict(list)
+        self._taps: list[Tap] = []
 
     def advertise(self, topic: str, message_type: type) -> None:
         """Declare ``topic`` to carry ``message_type``; later publishes are type-checked."""
@@ -73,8 +87,19 @@ class Bus:
             callback(message)
         return subscription
 
+    def subscribe_all(self, callback: Callable[[str, Any], None]) -> Tap:
+        """Call ``callback(topic, message)`` for every message on every topic (recorders,
+        bridges). Latched messages are not replayed; read :meth:`latched` for those."""
+        tap = Tap(callback, self)
+        self._taps.append(tap)
+        return tap
+
+    def latched(self, topic: str) -> list[Any]:
+        """The latched messages of ``topic`` (e.g. every arm's ``/tf_static``)."""
+        return list(self._latched.get(topic, ()))
+
     def has_subscribers(self, topic: str) -> bool:
-        return bool(self._subscriptions.get(topic))
+        return bool(self._taps) or bool(self._subscriptions.get(topic))
 
     def publish(self, topic: str, message: Any, *, latch: bool = False) -> None:
         """Deliver ``message`` to every subscriber of ``topic``.
@@ -93,6 +118,8 @@ class Bus:
             self._latched[topic].append(message)
         for subscription in tuple(self._subscriptions.get(topic, ())):
             subscription.callback(message)
+        for tap in tuple(self._taps):
+            tap.callback(topic, message)
 
     def forget_latched(self, topic: str, predicate: Callable[[Any], bool]) -> None:
         """Drop latched messages of ``topic`` for which ``predicate`` is true."""

@@ -6,8 +6,9 @@ import logging
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import Future
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import pybullet as p
@@ -28,6 +29,7 @@ from armfleet.errors import ArmfleetError, BringupError, DescriptionError, Unkno
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import BringupEvent, BringupStage, FloatArray, JointState, Positions
 from armfleet.names import check_arm_name
+from armfleet.request_queue import RequestQueue
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.spawn_pose import SpawnPose
 from armfleet.tf_tree import TfTree
@@ -45,6 +47,7 @@ HOLD_TIMEOUT_S = 2.0
 HOLD_STEPS = 20
 
 ControllerOverrides = Mapping[str, Mapping[str, Any]]
+T = TypeVar("T")
 
 
 class World:
@@ -83,6 +86,7 @@ class World:
         self._step_index = 0
         self._closed = False
         self._tf = TfTree(self._arm_states)
+        self._requests = RequestQueue()
         self._viewer: Viewer | None = None
         self.viewer_error: str | None = None
         if viewer:
@@ -127,6 +131,19 @@ class World:
     def physics_client(self) -> int:
         """PyBullet client id of this world (for inspection; don't step it yourself)."""
         return self._client
+
+    def submit(self, function: Callable[[], T]) -> Future[T]:
+        """Run ``function`` in the stepping thread at the next step boundary (thread-safe).
+
+        This is how other threads (a server, a client) act on the world: spawning,
+        moving, removing, reading, all happen between two steps, in order.
+        """
+        self._check_open()
+        return self._requests.submit(function)
+
+    def process_requests(self) -> int:
+        """Run the submitted requests now (the stepping thread calls this; also when paused)."""
+        return self._requests.drain()
 
     def arm(self, name: str) -> Arm:
         if name not in self._arms:
@@ -282,9 +299,15 @@ class World:
         logger.info("%s: %s", arm, stage.value)
         self._bus.publish(BRINGUP_TOPIC, event)
 
+    def remove(self, name: str) -> None:
+        """Take the arm ``name`` out of the world: controllers, topics, transforms, body."""
+        self._check_open()
+        self._remove(self.arm(name))
+
     def _remove(self, arm: Arm) -> None:
         if self._viewer is not None:
             self._viewer.remove_arm(arm.name)
+        arm.controller_manager.shutdown()
         arm.state_publisher.close()
         arm.body.remove()
         del self._arms[arm.name]
@@ -299,6 +322,7 @@ class World:
         always describe the world as it is now.
         """
         self._check_open()
+        self._requests.drain()
         stamp = self.time
         arms = self._arms.values()
         for arm in arms:
@@ -355,6 +379,7 @@ class World:
         """Disconnect the physics engine; the world can no longer be used."""
         if not self._closed:
             self._closed = True
+            self._requests.cancel_all(WorldClosed())
             try:
                 if self._viewer is not None:
                     self._viewer.close()

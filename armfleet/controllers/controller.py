@@ -98,6 +98,12 @@ class Controller(ABC):
         self.on_activate()
         self._state = LifecycleState.ACTIVE
 
+    def cleanup(self) -> None:
+        """inactive -> unconfigured: release what configure set up (subscriptions, ...)."""
+        self._require(LifecycleState.INACTIVE, "clean up")
+        self.on_cleanup()
+        self._state = LifecycleState.UNCONFIGURED
+
     def deactivate(self) -> None:
         """active -> inactive."""
         self._require(LifecycleState.ACTIVE, "deactivate")
@@ -111,6 +117,9 @@ class Controller(ABC):
 
     def on_configure(self) -> None:  # noqa: B027 - optional hook
         """Hook: set up from :attr:`parameters`."""
+
+    def on_cleanup(self) -> None:  # noqa: B027 - optional hook
+        """Hook: undo :meth:`on_configure`."""
 
     def on_activate(self) -> None:  # noqa: B027 - optional hook
         """Hook: claim interfaces."""

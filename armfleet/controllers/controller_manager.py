@@ -37,6 +37,15 @@ class ControllerManager:
         self._controllers[name].deactivate()
         self._active = [c for c in self._controllers.values() if c.state is LifecycleState.ACTIVE]
 
+    def shutdown(self) -> None:
+        """Deactivate and clean up every controller (the arm is leaving the world)."""
+        for controller in reversed(list(self._controllers.values())):
+            if controller.state is LifecycleState.ACTIVE:
+                controller.deactivate()
+            if controller.state is LifecycleState.INACTIVE:
+                controller.cleanup()
+        self._active = []
+
     def update(self, stamp: float, step_index: int) -> None:
         """Update every active controller whose period divides ``step_index``, in load order."""
         for controller in self._active:

@@ -66,7 +66,13 @@ class PositionController(Controller):
         self._state_topic = self.arm.topic("position_controller/state")
         self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
         self.arm.bus.advertise(self._state_topic, ControllerState)
-        self.arm.bus.subscribe(self.arm.topic("position_controller/commands"), self._on_command)
+        self._subscription = self.arm.bus.subscribe(
+            self.arm.topic("position_controller/commands"), self._on_command
+        )
+
+    def on_cleanup(self) -> None:
+        self._subscription.cancel()
+        self.trajectory = None
 
     def on_activate(self) -> None:
         body = self.arm.body

@@ -1,0 +1,70 @@
+"""Work handed to the stepping thread from other threads, run at step boundaries.
+
+The world stays single-threaded: a client thread never touches PyBullet or the
+controllers itself; it submits a function and waits on the returned future.
+"""
+
+from __future__ import annotations
+
+import queue
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+
+
+class RequestQueue:
+    """A FIFO of functions, drained by the thread that steps the world.
+
+    Args:
+        max_pending: requests waiting at most; submitting more raises ``queue.Full``.
+    """
+
+    def __init__(self, max_pending: int = 1024) -> None:
+        self._pending: queue.Queue[tuple[Callable[[], Any], Future[Any]]] = queue.Queue(max_pending)
+        self._draining = False
+
+    def submit(self, function: Callable[[], T]) -> Future[T]:
+        """Queue ``function``; its result or exception lands in the returned future."""
+        future: Future[T] = Future()
+        self._pending.put_nowait((function, future))
+        return future
+
+    def drain(self) -> int:
+        """Run every queued function, in order, in the calling thread; return how many ran.
+
+        Requests submitted while draining wait for the next drain, so a flood of
+        them cannot stall the world. A request that steps the world itself (a
+        spawn's bring-up) does not drain the queue from inside: requests never
+        interleave.
+        """
+        if self._draining:
+            return 0
+        self._draining = True
+        try:
+            count = self._pending.qsize()
+            for _ in range(count):
+                function, future = self._pending.get_nowait()
+                if not future.set_running_or_notify_cancel():
+                    continue
+                try:
+                    future.set_result(function())
+                except Exception as exc:  # the caller gets it; the world goes on
+                    future.set_exception(exc)
+                except BaseException as exc:  # Ctrl-C: tell the caller, then stop
+                    future.set_exception(exc)
+                    raise
+            return count
+        finally:
+            self._draining = False
+
+    def cancel_all(self, reason: BaseException) -> None:
+        """Fail every pending request with ``reason`` (the world is closing)."""
+        while True:
+            try:
+                _, future = self._pending.get_nowait()
+            except queue.Empty:
+                return
+            if future.set_running_or_notify_cancel():
+                future.set_exception(reason)
