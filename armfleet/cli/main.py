@@ -15,12 +15,12 @@ from armfleet.errors import ArmfleetError
 def build_parser() -> OneLineParser:
     parser = OneLineParser(prog="armfleet", description="Several robot arms in one PyBullet world.")
     parser.add_argument("--version", action="version", version=f"armfleet {__version__}")
-    subparsers = parser.add_subparsers(
-        dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser
-    )
+    # No metavar: a missing or unknown command then names the valid ones.
+    subparsers = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     spawn_command.add_parser(subparsers)
     launch_command.add_parser(subparsers)
     models_command.add_parser(subparsers)
+    parser.commands = tuple(subparsers.choices)
     return parser
 
 
@@ -28,7 +28,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command; a user error is one line on stderr and exit code 2."""
     logging.basicConfig(level=logging.WARNING, format="armfleet: %(message)s")
     try:
-        args = build_parser().parse_args(argv)
+        parser = build_parser()
+        args_given = sys.argv[1:] if argv is None else list(argv)
+        if not args_given:
+            raise UsageError(
+                f"no command given; choose one of: {', '.join(parser.commands)} "
+                "(see 'armfleet --help')"
+            )
+        args = parser.parse_args(args_given)
         code: int = args.run(args)
         return code
     except (UsageError, ArmfleetError) as exc:
