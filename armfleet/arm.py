@@ -6,9 +6,18 @@ from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.description import ArmDescription
+from armfleet.errors import ArmFault
 from armfleet.kinematics import ArmKinematics
-from armfleet.messages import FloatArray, JointCommand, JointState, Positions
+from armfleet.messages import (
+    ArmMode,
+    ArmStatus,
+    FloatArray,
+    JointCommand,
+    JointState,
+    Positions,
+)
 from armfleet.robot_state_publisher import RobotStatePublisher
+from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 
 
@@ -30,6 +39,7 @@ class Arm:
         broadcaster: JointStateBroadcaster,
         position_controller: PositionController,
         state_publisher: RobotStatePublisher,
+        safety: SafetySupervisor,
     ) -> None:
         self._name = name
         self._pose = pose
@@ -41,6 +51,7 @@ class Arm:
         self.broadcaster = broadcaster
         self.position_controller = position_controller
         self.state_publisher = state_publisher
+        self._safety = safety
 
     @property
     def name(self) -> str:
@@ -87,16 +98,48 @@ class Arm:
         """Whether the position controller's reference is still in motion."""
         return self.position_controller.is_moving
 
+    def status(self, stamp: float) -> ArmStatus:
+        """What the arm is doing now (also published on ``/<name>/status``)."""
+        controller = self.position_controller
+        fault = self.controller_manager.fault
+        if fault is not None:
+            mode, reason = ArmMode.ERROR, fault
+        elif controller.stop_reason is not None:
+            mode, reason = ArmMode.PROTECTIVE_STOP, controller.stop_reason
+        else:
+            mode, reason = (ArmMode.MOVING if controller.is_moving else ArmMode.HOLDING), ""
+        return ArmStatus(
+            stamp, self._name, mode, reason, tuple(controller.saturation_steps.tolist())
+        )
+
+    @property
+    def mode(self) -> ArmMode:
+        return self.status(0.0).mode
+
+    def reset_stop(self) -> None:
+        """Accept commands again after a protective stop (the arm holds where it stopped).
+
+        The arm may then move away from what it touches without stopping again.
+        """
+        self._safety.reset_stop(self)
+
+    def reset(self) -> None:
+        """Leave ``error`` (restarting the controllers at the current pose) and any stop."""
+        self.controller_manager.reset()
+        self._safety.reset_stop(self)
+
     def move_to(self, positions: Positions) -> None:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
 
         The command goes out on ``/<name>/position_controller/commands``.
 
         Raises:
-            TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError:
-                nothing is sent and the current motion goes on.
+            TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError,
+            ProtectiveStopError, ArmFault: nothing is sent and the current motion goes on.
         """
         values = self.position_controller.validate(positions)
+        if self.controller_manager.fault is not None:
+            raise ArmFault(self._name, self.controller_manager.fault)
         self.position_controller.plan(values)
         self._bus.publish(
             f"{self.namespace}/position_controller/commands",

@@ -20,7 +20,12 @@ from armfleet.messages import FloatArray
 #: Load flags: inertias from the file (so PyBullet and Pinocchio dynamics
 #: agree) and no visual shapes (PyBullet renders nothing here; the viewer
 #: takes visuals from Pinocchio).
-LOAD_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_IGNORE_VISUAL_SHAPES
+LOAD_FLAGS = (
+    p.URDF_USE_INERTIA_FROM_FILE
+    | p.URDF_IGNORE_VISUAL_SHAPES
+    | p.URDF_USE_SELF_COLLISION
+    | p.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT
+)
 _BRAKE_FORCE = 1e4
 
 
@@ -48,11 +53,14 @@ class ArmBody:
         finally:
             os.unlink(path)
         self._link_index: dict[str, int] = {}
+        #: Per link index: (parent link index, whether its joint moves).
+        self.link_parents: dict[int, tuple[int, bool]] = {}
         joint_index: dict[str, int] = {}
         for index in range(p.getNumJoints(self.body_id, physicsClientId=client)):
             info = p.getJointInfo(self.body_id, index, physicsClientId=client)
             joint_index[info[1].decode()] = index
             self._link_index[info[12].decode()] = index
+            self.link_parents[index] = (info[16], info[2] != p.JOINT_FIXED)
         missing = [name for name in joint_names if name not in joint_index]
         if missing:
             self.remove()
@@ -68,6 +76,9 @@ class ArmBody:
     @property
     def link_names(self) -> tuple[str, ...]:
         return tuple(self._link_index)
+
+    def link_index(self, link: str) -> int:
+        return self._link_index[link]
 
     def reset(self, positions: FloatArray) -> None:
         """Teleport the joints to ``positions`` at rest (only before control starts)."""

@@ -89,6 +89,20 @@ class MotionLimitError(ArmfleetError):
         )
 
 
+class ProtectiveStopError(ArmfleetError):
+    def __init__(self, arm: str, reason: str) -> None:
+        self.arm, self.reason = arm, reason
+        super().__init__(
+            f"{arm} is in protective stop ({reason}); call reset_stop() before moving it"
+        )
+
+
+class ArmFault(ArmfleetError):
+    def __init__(self, arm: str, reason: str) -> None:
+        self.arm, self.reason = arm, reason
+        super().__init__(f"{arm} is in error ({reason}); call reset() before moving it")
+
+
 class PoseError(ArmfleetError):
     """A spawn pose that cannot be parsed or is not finite."""
 

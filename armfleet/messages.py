@@ -117,3 +117,72 @@ class BringupEvent:
     stage: BringupStage
     stamp: float
     wall_time: float
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One contact between two bodies, as PyBullet reports it after a step.
+
+    Attributes:
+        body_a, body_b: arm names, or ``"ground"``.
+        link_a, link_b: link names (empty for the ground).
+        position: contact point on ``body_a`` in the world [m].
+        normal: contact normal from ``body_b`` to ``body_a``.
+        depth: penetration depth [m], >= 0.
+    """
+
+    body_a: str
+    link_a: str
+    body_b: str
+    link_b: str
+    position: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    depth: float
+
+    @property
+    def pair(self) -> tuple[str, str]:
+        """The two links in contact, ordered (``"ground"`` for the floor)."""
+        first, second = self.link_a or self.body_a, self.link_b or self.body_b
+        return (first, second) if first <= second else (second, first)
+
+
+@dataclass(frozen=True)
+class CollisionReport:
+    """Published on ``/collisions`` at every step with contacts, and once when they end.
+
+    Attributes:
+        stamp: simulated time [s].
+        contacts: every counted contact of that step.
+    """
+
+    stamp: float
+    contacts: tuple[Contact, ...]
+
+
+class ArmMode(enum.Enum):
+    """What an arm is doing, as reported on ``/<arm>/status``."""
+
+    HOLDING = "holding"
+    MOVING = "moving"
+    PROTECTIVE_STOP = "protective stop"
+    ERROR = "error"
+
+
+@dataclass(frozen=True)
+class ArmStatus:
+    """Published on ``/<arm>/status`` at 10 Hz and at once when a stop or fault happens.
+
+    Attributes:
+        stamp: simulated time [s].
+        arm: arm name.
+        mode: what the arm is doing.
+        reason: why it is stopped or in error ("" otherwise).
+        saturation_steps: per movable joint, the control updates whose torque hit
+            the URDF effort limit since spawn.
+    """
+
+    stamp: float
+    arm: str
+    mode: ArmMode
+    reason: str
+    saturation_steps: tuple[int, ...]

@@ -16,6 +16,8 @@ import pybullet as p
 from armfleet.arm import Arm
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
+from armfleet.collision_filter import filter_collisions
+from armfleet.contact_monitor import ContactMonitor
 from armfleet.controllers import (
     ArmContext,
     ControllerManager,
@@ -27,10 +29,17 @@ from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, BringupError, DescriptionError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
-from armfleet.messages import BringupEvent, BringupStage, FloatArray, JointState, Positions
+from armfleet.messages import (
+    BringupEvent,
+    BringupStage,
+    FloatArray,
+    JointState,
+    Positions,
+)
 from armfleet.names import check_arm_name
 from armfleet.request_queue import RequestQueue
 from armfleet.robot_state_publisher import RobotStatePublisher
+from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 from armfleet.tf_tree import TfTree
 
@@ -45,6 +54,8 @@ BROADCASTER_TIMEOUT_S = 1.0
 HOLD_TIMEOUT_S = 2.0
 #: Consecutive holding steps that make an arm ready.
 HOLD_STEPS = 20
+#: Period of the ``/<arm>/status`` reports [s].
+STATUS_PERIOD_S = 0.1
 
 ControllerOverrides = Mapping[str, Mapping[str, Any]]
 T = TypeVar("T")
@@ -86,6 +97,11 @@ class World:
         self._step_index = 0
         self._closed = False
         self._tf = TfTree(self._arm_states)
+        self._contacts = ContactMonitor(
+            self._client, self._ground, self._bus, lambda c, d: self._safety.on_new_contact(c, d)
+        )
+        self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
+        self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
         self._requests = RequestQueue()
         self._viewer: Viewer | None = None
         self.viewer_error: str | None = None
@@ -197,8 +213,11 @@ class World:
         body = ArmBody(self._client, description.urdf, kinematics.joint_names)
         try:
             body.reset(start)
+            filter_collisions(self._client, body, self._ground, description.ignored_contacts)
             context = ArmContext(name, body, kinematics, self._bus, self._dt)
-            manager = ControllerManager(name)
+            manager = ControllerManager(
+                context, on_fault=lambda reason: self._publish_status(self._arms[name])
+            )
             overrides, files = parameters or {}, parameter_files or {}
             broadcaster = JointStateBroadcaster(
                 context,
@@ -230,8 +249,10 @@ class World:
             broadcaster,
             controller,
             publisher,
+            self._safety,
         )
         self._arms[name] = arm
+        self._contacts.add_arm(name, body)
         try:
             self._report(name, BringupStage.SPAWNED, started)
             self._activate_broadcaster(arm)
@@ -308,6 +329,7 @@ class World:
         if self._viewer is not None:
             self._viewer.remove_arm(arm.name)
         arm.controller_manager.shutdown()
+        self._contacts.remove_arm(arm.body)
         arm.state_publisher.close()
         arm.body.remove()
         del self._arms[arm.name]
@@ -333,8 +355,21 @@ class World:
         self._step_index += 1
         for arm in arms:
             arm.body.read()
+        self._contacts.scan(self.time)
+        self._safety.after_scan()
+        if self._step_index % self._status_period_steps == 0:
+            for arm in arms:
+                self._publish_status(arm)
         if self._viewer is not None:
             self._viewer.tick(self)
+
+    @property
+    def contacts(self) -> ContactMonitor:
+        """Contacts of the last step and the running count."""
+        return self._contacts
+
+    def _publish_status(self, arm: Arm) -> None:
+        self._bus.publish(f"/{arm.name}/status", arm.status(self.time))
 
     def run(
         self,

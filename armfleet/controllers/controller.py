@@ -59,6 +59,8 @@ class Controller(ABC):
     type_name: ClassVar[str]
     parameter_schema: ClassVar[tuple[ParameterSpec, ...]]
     rate_parameter: ClassVar[str]
+    #: Whether it writes commands (stopped when the arm faults) or only reads.
+    writes_commands: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -70,7 +72,7 @@ class Controller(ABC):
         self._parameter_file = parameter_file
         self._overrides = dict(overrides or {})
         self._state = LifecycleState.UNCONFIGURED
-        self.parameters: dict[str, float] = {}
+        self.parameters: dict[str, float | bool] = {}
         self.period_steps = 1
 
     @property
@@ -87,7 +89,7 @@ class Controller(ABC):
         self.parameters = load_parameters(
             self.type_name, self.parameter_schema, self._parameter_file, self._overrides
         )
-        rate_hz = self.parameters[self.rate_parameter]
+        rate_hz = float(self.parameters[self.rate_parameter])
         self.period_steps = max(1, round(1.0 / (rate_hz * self.arm.dt)))
         self.on_configure()
         self._state = LifecycleState.INACTIVE

@@ -90,6 +90,30 @@ class JerkLimitedTrajectory:
             candidate,
         )
 
+    def stop(self, max_acceleration: FloatArray, max_jerk: FloatArray) -> float:
+        """Bring the reference to rest as fast as the given (stopping) limits allow.
+
+        Returns the stopping time [s].
+        """
+        dofs = len(self.position)
+        stopping = ruckig.InputParameter(dofs)
+        stopping.control_interface = ruckig.ControlInterface.Velocity
+        stopping.max_velocity = self._input.max_velocity
+        stopping.max_acceleration = list(max_acceleration)
+        stopping.max_jerk = list(max_jerk)
+        stopping.current_position = self.position.tolist()
+        stopping.current_velocity = self.velocity.tolist()
+        stopping.current_acceleration = self.acceleration.tolist()
+        stopping.target_velocity = [0.0] * dofs
+        stopping.target_acceleration = [0.0] * dofs
+        trajectory = ruckig.Trajectory(dofs)
+        result = self._otg.calculate(stopping, trajectory)
+        if result not in (ruckig.Result.Working, ruckig.Result.Finished):
+            raise TrajectoryError(f"Ruckig cannot plan a stop: {result}")
+        self._input = stopping
+        self._moving = True
+        return float(trajectory.duration)
+
     def follow(self, plan: MotionPlan) -> None:
         """Start following ``plan`` (made by :meth:`plan` from the current state)."""
         self._input = plan.input

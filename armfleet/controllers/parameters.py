@@ -27,13 +27,14 @@ class ParameterSpec:
 
     Attributes:
         name: key in the file, with its unit as a suffix where it has one.
-        default: value when the file does not give one.
+        default: value when the file does not give one; a bool default makes
+            the parameter a switch (true/false).
         description: what it does, with units.
         lower, upper: inclusive bounds.
     """
 
     name: str
-    default: float
+    default: float | bool
     description: str
     lower: float = -math.inf
     upper: float = math.inf
@@ -49,7 +50,7 @@ def load_parameters(
     schema: Sequence[ParameterSpec],
     path: Path | None = None,
     overrides: Mapping[str, Any] | None = None,
-) -> dict[str, float]:
+) -> dict[str, float | bool]:
     """Read ``path`` (default: the controller's shipped file), apply ``overrides``, validate.
 
     The file holds ``{<controller>: {<parameter>: value, ...}}``.
@@ -85,7 +86,7 @@ def load_parameters(
 
 def _check(
     controller: str, source: str, schema: Sequence[ParameterSpec], key: str, value: Any
-) -> float:
+) -> float | bool:
     try:
         return check_parameter(controller, schema, key, value)
     except ParameterError as exc:
@@ -94,7 +95,7 @@ def _check(
 
 def check_parameter(
     controller: str, schema: Sequence[ParameterSpec], key: str, value: Any
-) -> float:
+) -> float | bool:
     """Return ``value`` as a float if ``key`` is a parameter of ``schema`` and fits it."""
     specs = {spec.name: spec for spec in schema}
     spec = specs.get(key)
@@ -104,10 +105,14 @@ def check_parameter(
         raise ParameterError(
             f"unknown {controller} parameter '{key}'; {hint}valid: {', '.join(sorted(specs))}"
         )
+    if isinstance(spec.default, bool):
+        if not isinstance(value, bool):
+            raise ParameterError(f"{controller}.{key} = {value!r} must be true or false")
+        return value
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise ParameterError(f"{controller}.{key} = {value!r} must be a finite number")
     if not spec.lower <= value <= spec.upper:
         raise ParameterError(
             f"{controller}.{key} = {value} is outside [{spec.lower:g}, {spec.upper:g}]"
         )
-    return float(value)
+    return float(value)  # a switch is returned as a bool above

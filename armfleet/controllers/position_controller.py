@@ -25,6 +25,7 @@ from armfleet.errors import (
     JointLimitError,
     MotionLimitError,
     NonFiniteTarget,
+    ProtectiveStopError,
     TargetLengthError,
 )
 from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
@@ -45,7 +46,15 @@ class PositionController(Controller):
         ParameterSpec("kp_s2", 2500.0, "position feedback gain [1/s^2]", 0.0, 1e6),
         ParameterSpec("kd_s", 100.0, "velocity feedback gain [1/s]", 0.0, 1e4),
         ParameterSpec("hold_tolerance_rad", 1e-3, "holding tolerance [rad]", 1e-9, 1.0),
+        ParameterSpec(
+            "protective_stop", True, "stop and hold on an unexpected contact until reset_stop()"
+        ),
+        ParameterSpec(
+            "stop_acceleration_rad_s2", 15.0, "deceleration limit of a protective stop", 1e-3, 1e4
+        ),
+        ParameterSpec("stop_jerk_rad_s3", 1500.0, "jerk limit of a protective stop", 1e-3, 1e6),
     )
+    writes_commands = True
 
     def on_configure(self) -> None:
         kinematics = self.arm.kinematics
@@ -60,6 +69,11 @@ class PositionController(Controller):
         self._kp = self.parameters["kp_s2"]
         self._kd = self.parameters["kd_s"]
         self._effort_limit = kinematics.effort_limit
+        #: Per movable joint, the updates whose torque was clipped to the effort limit.
+        self.saturation_steps = np.zeros(len(kinematics.joint_names), dtype=np.int64)
+        #: Why the arm is in protective stop, or None.
+        self.stop_reason: str | None = None
+        self._anchor_when_stopped = False
         self._acceleration = np.zeros(len(kinematics.joint_names))
         self._aux_hold = np.zeros(len(self._aux))
         self.trajectory: JerkLimitedTrajectory | None = None
@@ -118,6 +132,38 @@ class PositionController(Controller):
         self.trajectory.follow(plan)
         return plan.duration
 
+    @property
+    def protective_stop_enabled(self) -> bool:
+        return bool(self.parameters["protective_stop"])
+
+    def protective_stop(self, reason: str) -> bool:
+        """Stop within the jerk limits and hold; refuse motions until :meth:`reset_stop`.
+
+        Returns whether this started a stop (False if disabled or already stopped).
+        """
+        if not self.protective_stop_enabled or self.stop_reason is not None:
+            return False
+        if self.trajectory is None:
+            return False
+        self.stop_reason = reason
+        # Brake from where the arm is, not from where the reference wanted it: an
+        # arm blocked by a contact then stops at once instead of pushing on.
+        trajectory = self.trajectory
+        trajectory.position[:] = self.arm.body.position[self._arm]
+        trajectory.velocity[:] = self.arm.body.velocity[self._arm]
+        n = len(self._arm)
+        trajectory.stop(
+            np.full(n, self.parameters["stop_acceleration_rad_s2"]),
+            np.full(n, self.parameters["stop_jerk_rad_s3"]),
+        )
+        self._anchor_when_stopped = True
+        logger.warning("%s: protective stop: %s", self.arm.name, reason)
+        return True
+
+    def reset_stop(self) -> None:
+        """Accept motions again after a protective stop."""
+        self.stop_reason = None
+
     def plan(self, target: Positions) -> MotionPlan:
         """Plan a motion to ``target`` from the current reference, checked, not followed.
 
@@ -131,6 +177,8 @@ class PositionController(Controller):
         values = self.validate(target)
         if self.trajectory is None:
             raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
+        if self.stop_reason is not None:
+            raise ProtectiveStopError(self.arm.name, self.stop_reason)
         plan = self.trajectory.plan(values)
         for name, low, high, lower, upper in zip(
             self.joint_names,
@@ -167,6 +215,7 @@ class PositionController(Controller):
         if aux.size:
             acceleration[aux] = self._kp * (self._aux_hold - q[aux]) - self._kd * v[aux]
         tau = self.arm.kinematics.inverse_dynamics(q, v, acceleration)
+        self.saturation_steps += np.abs(tau) > self._effort_limit
         np.clip(tau, -self._effort_limit, self._effort_limit, out=body.effort_command)
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(
@@ -183,6 +232,11 @@ class PositionController(Controller):
                 ),
             )
         trajectory.advance()
+        if self._anchor_when_stopped and not trajectory.moving:
+            # Stopped: hold where the arm is (a contact may have blocked it short of
+            # the reference), so it does not keep pushing against what it touched.
+            trajectory.position[:] = q[arm]
+            self._anchor_when_stopped = False
 
 
 def check_target(

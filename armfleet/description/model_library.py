@@ -17,6 +17,7 @@ from xml.dom import minidom
 import xacro
 
 from armfleet.description.resource_resolver import ResourceResolver
+from armfleet.description.srdf import disabled_collision_pairs
 from armfleet.description.upstream_macro import XACRO_NS, prefixable_macro
 from armfleet.errors import DescriptionError, UnknownModel
 from armfleet.paths import data_dir
@@ -24,6 +25,7 @@ from armfleet.spawn_pose import SpawnPose
 
 XACRO_SUFFIX = ".urdf.xacro"
 UPSTREAM_PROPERTY = "armfleet_upstream_urdf"
+SRDF_PROPERTY = "armfleet_upstream_srdf"
 HOME_PROPERTY = "armfleet_home"
 
 
@@ -36,12 +38,15 @@ class ArmDescription:
         prefix: prefix of every link and joint, e.g. ``"bob_"``.
         urdf: URDF text with absolute mesh paths.
         home: home positions of the arm joints in chain order [rad or m].
+        ignored_contacts: link pairs whose contacts don't count (from the upstream
+            SRDF's ``<disable_collisions>``; empty without one).
     """
 
     model: str
     prefix: str
     urdf: str
     home: tuple[float, ...]
+    ignored_contacts: tuple[tuple[str, str], ...] = ()
 
     @property
     def base_link(self) -> str:
@@ -110,7 +115,11 @@ class ModelLibrary:
                 raise DescriptionError(f"{path}: xacro failed: {exc}") from exc
             _make_massless_links_explicit(document)
             text = document.toprettyxml(indent="  ")
-        return ArmDescription(model, prefix, self._resolver.resolve_text(text), home)
+        ignored: tuple[tuple[str, str], ...] = ()
+        if SRDF_PROPERTY in properties:
+            srdf = self._resolver.resolve(properties[SRDF_PROPERTY])
+            ignored = disabled_collision_pairs(srdf.read_text(), prefix, str(srdf))
+        return ArmDescription(model, prefix, self._resolver.resolve_text(text), home, ignored)
 
     def _upstream_macro(self, uri: str) -> str:
         if uri not in self._macros:
