@@ -364,6 +364,11 @@ class World:
             self._viewer.tick(self)
 
     @property
+    def safety(self) -> SafetySupervisor:
+        """Protective stops: their count, and the contacts excused after a reset."""
+        return self._safety
+
+    @property
     def contacts(self) -> ContactMonitor:
         """Contacts of the last step and the running count."""
         return self._contacts

@@ -149,8 +149,14 @@ class PositionController(Controller):
         # Brake from where the arm is, not from where the reference wanted it: an
         # arm blocked by a contact then stops at once instead of pushing on.
         trajectory = self.trajectory
+        # (An impact can spin a joint past its limit: brake from the limit then.)
         trajectory.position[:] = self.arm.body.position[self._arm]
-        trajectory.velocity[:] = self.arm.body.velocity[self._arm]
+        np.clip(
+            self.arm.body.velocity[self._arm],
+            -self.max_velocity,
+            self.max_velocity,
+            out=trajectory.velocity,
+        )
         n = len(self._arm)
         trajectory.stop(
             np.full(n, self.parameters["stop_acceleration_rad_s2"]),

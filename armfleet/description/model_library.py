@@ -84,11 +84,15 @@ class ModelLibrary:
         return sorted(p.name[: -len(XACRO_SUFFIX)] for p in self._folder.glob(f"*{XACRO_SUFFIX}"))
 
     def path(self, model: str) -> Path:
-        """Path of a model's xacro file; raises :class:`UnknownModel`."""
-        path = self._folder / f"{model}{XACRO_SUFFIX}"
-        if not path.is_file():
-            raise UnknownModel(model, self.names)
-        return path
+        """Path of a model's xacro file; raises :class:`UnknownModel`.
+
+        Only names of files in the folder are accepted: a name can't reach a
+        description elsewhere (descriptions are code; see the README).
+        """
+        names = self.names
+        if model not in names:
+            raise UnknownModel(model, names)
+        return self._folder / f"{model}{XACRO_SUFFIX}"
 
     def expand(self, model: str, prefix: str, pose: SpawnPose | None = None) -> ArmDescription:
         """Expand ``model`` for an arm whose names start with ``prefix``, placed at ``pose``."""
