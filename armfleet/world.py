@@ -8,37 +8,26 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Future
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
-import numpy as np
 import pybullet as p
 
 from armfleet.arm import Arm
-from armfleet.arm_body import ArmBody
+from armfleet.arm_assembly import ControllerOverrides, assemble_arm, start_positions
+from armfleet.bringup import BRINGUP_TOPIC, bring_up
 from armfleet.bus import Bus
-from armfleet.collision_filter import filter_collisions
 from armfleet.contact_monitor import ContactMonitor
-from armfleet.controllers import (
-    ArmContext,
-    ControllerManager,
-    JointStateBroadcaster,
-    PositionController,
-)
-from armfleet.controllers.position_controller import check_target
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
-from armfleet.errors import ArmfleetError, BringupError, DescriptionError, UnknownArm, WorldClosed
+from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     BringupEvent,
-    BringupStage,
     FloatArray,
-    JointState,
     Positions,
 )
 from armfleet.names import check_arm_name
 from armfleet.request_queue import RequestQueue
-from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 from armfleet.tf_tree import TfTree
@@ -48,16 +37,9 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger("armfleet")
 
-BRINGUP_TOPIC = "/bringup"
-#: Simulated time an arm may take to publish its first joint state / to hold [s].
-BROADCASTER_TIMEOUT_S = 1.0
-HOLD_TIMEOUT_S = 2.0
-#: Consecutive holding steps that make an arm ready.
-HOLD_STEPS = 20
 #: Period of the ``/<arm>/status`` reports [s].
 STATUS_PERIOD_S = 0.1
 
-ControllerOverrides = Mapping[str, Mapping[str, Any]]
 T = TypeVar("T")
 
 
@@ -207,118 +189,36 @@ class World:
             )
         description = self._models.expand(model, f"{name}_", pose)
         kinematics = ArmKinematics(description.urdf, description.tool0)
-        start = self._start_positions(name, kinematics, description.home, initial_positions)
+        start = start_positions(name, kinematics, description.home, initial_positions)
         started = time.perf_counter()
-
-        body = ArmBody(self._client, description.urdf, kinematics.joint_names)
-        try:
-            body.reset(start)
-            filter_collisions(self._client, body, self._ground, description.ignored_contacts)
-            context = ArmContext(name, body, kinematics, self._bus, self._dt)
-            manager = ControllerManager(
-                context, on_fault=lambda reason: self._publish_status(self._arms[name])
-            )
-            overrides, files = parameters or {}, parameter_files or {}
-            broadcaster = JointStateBroadcaster(
-                context,
-                files.get(JointStateBroadcaster.type_name),
-                overrides.get(JointStateBroadcaster.type_name),
-            )
-            controller = PositionController(
-                context,
-                files.get(PositionController.type_name),
-                overrides.get(PositionController.type_name),
-            )
-            manager.load(broadcaster)
-            manager.load(controller)
-            # Validate both parameter sets before the arm joins the world.
-            broadcaster.configure()
-            controller.configure()
-        except BaseException:
-            body.remove()
-            raise
-        publisher = RobotStatePublisher(name, kinematics, self._bus, self.time)
-        arm = Arm(
-            name,
-            pose,
-            description,
-            body,
-            kinematics,
-            self._bus,
-            manager,
-            broadcaster,
-            controller,
-            publisher,
-            self._safety,
+        arm = assemble_arm(
+            name=name,
+            pose=pose,
+            description=description,
+            kinematics=kinematics,
+            start=start,
+            client=self._client,
+            ground=self._ground,
+            bus=self._bus,
+            dt=self._dt,
+            stamp=self.time,
+            safety=self._safety,
+            on_fault=lambda reason: self._publish_status(self._arms[name]),
+            parameters=parameters or {},
+            parameter_files=parameter_files or {},
         )
         self._arms[name] = arm
-        self._contacts.add_arm(name, body)
+        self._contacts.add_arm(name, arm.body)
         try:
-            self._report(name, BringupStage.SPAWNED, started)
-            self._activate_broadcaster(arm)
-            self._report(name, BringupStage.BROADCASTER_ACTIVE, started)
-            manager.activate("position_controller")
-            self._report(name, BringupStage.CONTROLLER_ACTIVE, started)
-            self._wait_holding(arm)
-            if self._viewer is not None:
-                self._viewer.add_arm(arm)
-            self._report(name, BringupStage.READY, started)
+            bring_up(self, arm, started, on_ready=self._show)
         except BaseException:
             self._remove(arm)
             raise
         return arm
 
-    def _start_positions(
-        self,
-        name: str,
-        kinematics: ArmKinematics,
-        home: Sequence[float],
-        initial: Positions | None,
-    ) -> FloatArray:
-        lower, upper = kinematics.lower, kinematics.upper
-        start = np.where((lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper)).astype(float)
-        arm = kinematics.arm_indices
-        if len(home) != len(arm):
-            raise DescriptionError(f"home pose has {len(home)} values for {len(arm)} arm joints")
-        start[arm] = home
-        if initial is not None:
-            # Same checks, same messages as a motion target.
-            start[arm] = check_target(
-                name, initial, [kinematics.joint_names[i] for i in arm], lower[arm], upper[arm]
-            )
-        return start
-
-    def _activate_broadcaster(self, arm: Arm) -> None:
-        seen: list[JointState] = []
-        subscription = self._bus.subscribe(f"/{arm.name}/joint_states", seen.append)
-        try:
-            arm.controller_manager.activate("joint_state_broadcaster")
-            deadline = self._step_index + math.ceil(BROADCASTER_TIMEOUT_S / self._dt)
-            while not seen:
-                if self._step_index >= deadline:
-                    raise BringupError(
-                        f"{arm.name}: no joint state within {BROADCASTER_TIMEOUT_S} s"
-                    )
-                self.step()
-        finally:
-            subscription.cancel()
-
-    def _wait_holding(self, arm: Arm) -> None:
-        deadline = self._step_index + math.ceil(HOLD_TIMEOUT_S / self._dt)
-        holding = 0
-        while holding < HOLD_STEPS:
-            if self._step_index >= deadline:
-                raise BringupError(
-                    f"{arm.name}: not holding its pose after {HOLD_TIMEOUT_S} s "
-                    f"(tracking error {arm.position_controller.tracking_error:.3g} rad)"
-                )
-            self.step()
-            holding = holding + 1 if arm.position_controller.is_holding else 0
-
-    def _report(self, arm: str, stage: BringupStage, started: float) -> None:
-        event = BringupEvent(arm, stage, self.time, time.perf_counter() - started)
-        logger.info("%s: %s", arm, stage.value)
-        self._bus.publish(BRINGUP_TOPIC, event)
+    def _show(self, arm: Arm) -> None:
+        if self._viewer is not None:
+            self._viewer.add_arm(arm)
 
     def remove(self, name: str) -> None:
         """Take the arm ``name`` out of the world: controllers, topics, transforms, body."""

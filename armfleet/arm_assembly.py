@@ -1,0 +1,100 @@
+"""Putting one arm together: its body in PyBullet, its controllers, its transforms."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from armfleet.arm import Arm
+from armfleet.arm_body import ArmBody
+from armfleet.bus import Bus
+from armfleet.collision_filter import filter_collisions
+from armfleet.controllers import (
+    ArmContext,
+    ControllerManager,
+    JointStateBroadcaster,
+    PositionController,
+)
+from armfleet.controllers.position_controller import check_target
+from armfleet.description import ArmDescription
+from armfleet.errors import DescriptionError
+from armfleet.kinematics import ArmKinematics
+from armfleet.messages import FloatArray, Positions
+from armfleet.robot_state_publisher import RobotStatePublisher
+from armfleet.safety_supervisor import SafetySupervisor
+from armfleet.spawn_pose import SpawnPose
+
+ControllerOverrides = Mapping[str, Mapping[str, Any]]
+
+
+def start_positions(
+    name: str, kinematics: ArmKinematics, home: Sequence[float], initial: Positions | None
+) -> FloatArray:
+    """Every movable joint's position at spawn: ``initial`` (checked) or the model's home
+    for the arm joints, 0 (or mid-range when 0 is outside the limits) for the others."""
+    lower, upper = kinematics.lower, kinematics.upper
+    start = np.where((lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper)).astype(float)
+    arm = kinematics.arm_indices
+    if len(home) != len(arm):
+        raise DescriptionError(f"home pose has {len(home)} values for {len(arm)} arm joints")
+    start[arm] = home
+    if initial is not None:
+        # Same checks, same messages as a motion target.
+        names = [kinematics.joint_names[i] for i in arm]
+        start[arm] = check_target(name, initial, names, lower[arm], upper[arm])
+    return start
+
+
+def assemble_arm(
+    *,
+    name: str,
+    pose: SpawnPose,
+    description: ArmDescription,
+    kinematics: ArmKinematics,
+    start: FloatArray,
+    client: int,
+    ground: int,
+    bus: Bus,
+    dt: float,
+    stamp: float,
+    safety: SafetySupervisor,
+    on_fault: Callable[[str], None],
+    parameters: ControllerOverrides,
+    parameter_files: Mapping[str, Path],
+) -> Arm:
+    """Load the body (brakes on, at ``start``) and configure its controllers.
+
+    Both parameter sets are validated before the arm is returned; on any error
+    the body is removed again and the world is as it was.
+    """
+    body = ArmBody(client, description.urdf, kinematics.joint_names)
+    try:
+        body.reset(start)
+        filter_collisions(client, body, ground, description.ignored_contacts)
+        context = ArmContext(name, body, kinematics, bus, dt)
+        manager = ControllerManager(context, on_fault=on_fault)
+        broadcaster = JointStateBroadcaster(
+            context,
+            parameter_files.get(JointStateBroadcaster.type_name),
+            parameters.get(JointStateBroadcaster.type_name),
+        )
+        controller = PositionController(
+            context,
+            parameter_files.get(PositionController.type_name),
+            parameters.get(PositionController.type_name),
+        )
+        manager.load(broadcaster)
+        manager.load(controller)
+        broadcaster.configure()
+        controller.configure()
+    except BaseException:
+        body.remove()
+        raise
+    publisher = RobotStatePublisher(name, kinematics, bus, stamp)
+    return Arm(
+        name, pose, description, body, kinematics, bus, manager, broadcaster, controller,
+        publisher, safety,
+    )  # fmt: skip
