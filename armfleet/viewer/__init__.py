@@ -1,0 +1,14 @@
+"""MeshCat viewer: every arm of a world live in the browser, on 127.0.0.1 only.
+
+>>> world = armfleet.World(viewer=True)       # doctest: +SKIP
+>>> print(world.viewer.url)                    # doctest: +SKIP
+http://127.0.0.1:45321/static/
+
+Importing this package is cheap: MeshCat, Pinocchio's visualizer, ZMQ and
+tornado load only when a viewer starts.
+"""
+
+from armfleet.viewer.errors import ViewerError, ViewerTimeout
+from armfleet.viewer.viewer import DISPLAY_RATE_HZ, Viewer, start_viewer
+
+__all__ = ["DISPLAY_RATE_HZ", "Viewer", "ViewerError", "ViewerTimeout", "start_viewer"]

@@ -1,0 +1,364 @@
+"""The viewer's server process: the MeshCat page and its websocket, on 127.0.0.1 only.
+
+MeshCat's stock server listens on every interface; this one binds its web
+port and its ZMQ port to the loopback address, on free ports unless a web
+port is given. :class:`armfleet.viewer.server.ViewerServer` runs this file as
+a script (``runpy``), so it imports only tornado, pyzmq and umsgpack, never
+armfleet. It prints one JSON line on stdout, ``{"web_port": ..., "zmq_port": ...}``
+or ``{"error": "..."}``, then serves until its parent process is gone or it is
+terminated.
+
+ZMQ protocol (a REP socket; every request gets one reply):
+
+- ``[type, path, data]``: one MeshCat command (``set_object``, ``set_transform``,
+  ``set_property``, ``delete``, ``set_animation``); kept in the scene tree and
+  sent to every browser. Reply ``ok``.
+- ``[b"batch", type, path, data, ...]``: live updates. A browser whose socket
+  is still busy with earlier data skips them and later gets the latest state
+  of each node it missed, so a slow browser only sees fewer frames.
+- ``[b"scene"]``: reply ``[b"scene", command, ...]``, the commands that rebuild
+  the current scene, in order.
+- ``[b"ping"]``: reply ``ok``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import importlib.util
+import json
+import os
+import signal
+import socket
+import sys
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import tornado.httpserver
+import tornado.ioloop
+import tornado.netutil
+import tornado.web
+import tornado.websocket
+import umsgpack  # type: ignore[import-untyped]
+import zmq
+from zmq.eventloop.zmqstream import ZMQStream
+
+LOOPBACK = "127.0.0.1"
+COMMANDS = frozenset(
+    {b"set_object", b"set_transform", b"set_property", b"delete", b"set_animation"}
+)
+PARENT_CHECK_MS = 250
+#: armfleet's page (MeshCat's viewer plus a mesh cache); MeshCat's script comes from its package.
+OWN_PAGE_FOLDER = Path(__file__).with_name("static")
+
+#: Field of a mesh-file object naming its mesh; the page parses each named mesh once.
+MESH_TAG = "armfleet_mesh"
+
+NodePath = tuple[str, ...]
+
+
+class SharedMesh(NamedTuple):
+    """A ``set_object`` of a mesh file, sendable without the file to a page that has it.
+
+    Attributes:
+        digest: names the mesh (file text, transform, materials).
+        full: the command, tagged with ``digest``.
+        reference: the same command without the file text.
+    """
+
+    digest: str
+    full: bytes
+    reference: bytes
+
+
+def share_mesh(data: bytes) -> SharedMesh | None:
+    """A :class:`SharedMesh` for a ``set_object`` of a mesh file; None for other commands."""
+    if b"_meshfile_object" not in data:
+        return None
+    command = umsgpack.unpackb(data)
+    wrapper = command.get("object") if isinstance(command, dict) else None
+    if not isinstance(wrapper, dict):
+        return None
+    inner = wrapper.get("object")
+    if not isinstance(inner, dict) or inner.get("type") != "_meshfile_object":
+        return None
+    text = inner.get("data")
+    if not isinstance(text, str | bytes):
+        return None
+    materials = [
+        {key: value for key, value in material.items() if key != "uuid"}
+        for material in wrapper.get("materials", [])
+        if isinstance(material, dict)
+    ]
+    identity = [inner.get("format"), inner.get("matrix"), inner.get("resources"), materials, text]
+    digest = hashlib.sha256(umsgpack.packb(identity)).hexdigest()[:32]
+    inner[MESH_TAG] = digest
+    full = umsgpack.packb(command)
+    inner["data"] = text[:0]
+    return SharedMesh(digest, full, umsgpack.packb(command))
+
+
+#: What a node holds and a browser is sent.
+Message = bytes | SharedMesh
+
+
+def split_path(path: bytes) -> NodePath:
+    """``b"/meshcat/armfleet/bob"`` -> ``("meshcat", "armfleet", "bob")``."""
+    return tuple(part for part in path.decode("utf-8").split("/") if part)
+
+
+class SceneNode:
+    """One node of the scene as the server keeps it: the latest command of each kind."""
+
+    __slots__ = ("animation", "children", "object", "properties", "transform")
+
+    def __init__(self) -> None:
+        self.children: dict[str, SceneNode] = {}
+        self.object: Message | None = None
+        self.transform: bytes | None = None
+        self.properties: dict[str, bytes] = {}
+        self.animation: bytes | None = None
+
+    def find(self, path: NodePath) -> SceneNode:
+        """The node at ``path``, created (with its parents) if missing."""
+        node = self
+        for name in path:
+            node = node.children.setdefault(name, SceneNode())
+        return node
+
+    def get(self, path: NodePath) -> SceneNode | None:
+        """The node at ``path``, or None; creates nothing."""
+        node: SceneNode | None = self
+        for name in path:
+            if node is None:
+                return None
+            node = node.children.get(name)
+        return node
+
+    def delete(self, path: NodePath) -> None:
+        if not path:
+            self.children.clear()
+            self.object = self.transform = self.animation = None
+            self.properties.clear()
+            return
+        parent = self.get(path[:-1])
+        if parent is not None:
+            parent.children.pop(path[-1], None)
+
+    def state(self) -> Iterator[Message]:
+        """This node's own commands: object, properties, transform, animation."""
+        if self.object is not None:
+            yield self.object
+        yield from self.properties.values()
+        if self.transform is not None:
+            yield self.transform
+        if self.animation is not None:
+            yield self.animation
+
+    def commands(self) -> Iterator[Message]:
+        """Every command of this subtree, parents before children."""
+        yield from self.state()
+        for child in self.children.values():
+            yield from child.commands()
+
+
+class BrowserSocket(tornado.websocket.WebSocketHandler):
+    """The websocket of one browser tab."""
+
+    def initialize(self, bridge: Bridge) -> None:
+        self.bridge = bridge
+        self._pending: Any = None  # the Future of the last write
+        self._stale: set[NodePath] = set()
+        self._meshes: set[str] = set()  # digests of the meshes this page has
+
+    def prepare(self) -> None:
+        check_host(self)
+
+    def open(self, *args: str, **kwargs: str) -> None:
+        self.bridge.browsers.add(self)
+        self.write_all(list(self.bridge.tree.commands()))
+
+    def on_close(self) -> None:
+        self.bridge.browsers.discard(self)
+
+    def on_message(self, message: str | bytes) -> None:
+        """Browsers only send image captures, which armfleet does not use."""
+
+    @property
+    def busy(self) -> bool:
+        return self._pending is not None and not self._pending.done()
+
+    def write_all(self, messages: Sequence[Message]) -> None:
+        future = None
+        try:
+            for message in messages:
+                if isinstance(message, SharedMesh):
+                    known = message.digest in self._meshes
+                    self._meshes.add(message.digest)
+                    message = message.reference if known else message.full
+                future = self.write_message(message, binary=True)
+        except tornado.websocket.WebSocketClosedError:
+            return
+        if future is not None:
+            self._pending = future
+            future.add_done_callback(lambda _: self._catch_up())
+
+    def write_latest(self, paths: Sequence[NodePath], messages: Sequence[Message]) -> None:
+        """Send live updates, or remember their nodes if the socket is still busy."""
+        if self.busy:
+            self._stale.update(paths)
+        else:
+            self.write_all(messages)
+
+    def _catch_up(self) -> None:
+        if not self._stale or self.busy:
+            return
+        stale, self._stale = self._stale, set()
+        messages: list[Message] = []
+        for path in stale:
+            node = self.bridge.tree.get(path)
+            if node is not None:
+                messages.extend(node.state())
+        self.write_all(messages)
+
+
+class PageHandler(tornado.web.StaticFileHandler):
+    """The page and its scripts, for loopback host names only."""
+
+    def prepare(self) -> None:
+        check_host(self)
+
+
+def check_host(handler: tornado.web.RequestHandler) -> None:
+    """Refuse requests for a host name other than the server's own (DNS rebinding)."""
+    if handler.request.host not in handler.settings["loopback_hosts"]:
+        raise tornado.web.HTTPError(403)
+
+
+class Bridge:
+    """Web server, websockets and ZMQ socket of the viewer, all on 127.0.0.1.
+
+    Args:
+        web_port: port of the page; 0 for a free one.
+        parent_pid: exit when this process is gone (None: never check).
+    """
+
+    def __init__(self, web_port: int, parent_pid: int | None) -> None:
+        self.tree = SceneNode()
+        self.browsers: set[BrowserSocket] = set()
+        self._parent_pid = parent_pid
+        sockets = tornado.netutil.bind_sockets(web_port, address=LOOPBACK, family=socket.AF_INET)
+        self.web_port: int = sockets[0].getsockname()[1]
+        self._context = zmq.Context()
+        self._socket = self._context.socket(zmq.REP)
+        self._socket.setsockopt(zmq.LINGER, 0)
+        self.zmq_port: int = self._socket.bind_to_random_port(f"tcp://{LOOPBACK}")
+        self._stream = ZMQStream(self._socket)
+        self._stream.on_recv(self._on_request)
+        own = {"path": str(OWN_PAGE_FOLDER), "default_filename": "index.html"}
+        meshcat = {"path": str(meshcat_page_folder())}
+        app = tornado.web.Application(
+            [
+                (r"/static/((?:index\.html)?|armfleet-[a-z-]+\.js)", PageHandler, own),
+                (r"/static/(.*)", PageHandler, meshcat),
+                (r"/", BrowserSocket, {"bridge": self}),
+            ],
+            loopback_hosts={f"{LOOPBACK}:{self.web_port}", f"localhost:{self.web_port}"},
+        )
+        self._http = tornado.httpserver.HTTPServer(app)
+        self._http.add_sockets(sockets)
+
+    def serve(self) -> None:
+        if self._parent_pid is not None:
+            tornado.ioloop.PeriodicCallback(self._check_parent, PARENT_CHECK_MS).start()
+        tornado.ioloop.IOLoop.current().start()
+
+    def _check_parent(self) -> None:
+        if os.getppid() != self._parent_pid:
+            tornado.ioloop.IOLoop.current().stop()
+
+    # -- ZMQ requests ------------------------------------------------------------------
+    def _on_request(self, frames: list[bytes]) -> None:
+        kind = frames[0]
+        if kind == b"batch":
+            self._on_batch(frames[1:])
+            self._socket.send(b"ok")
+        elif kind == b"scene":
+            commands = self.tree.commands()
+            full = [c.full if isinstance(c, SharedMesh) else c for c in commands]
+            self._socket.send_multipart([b"scene", *full])
+        elif kind == b"ping":
+            self._socket.send(b"ok")
+        elif kind in COMMANDS and len(frames) == 3:
+            message = self._apply(kind, split_path(frames[1]), frames[2])
+            for browser in list(self.browsers):
+                browser.write_all([message])
+            self._socket.send(b"ok")
+        else:
+            self._socket.send(b"error: unknown request " + kind[:40])
+
+    def _on_batch(self, frames: list[bytes]) -> None:
+        if len(frames) % 3:
+            return
+        paths: list[NodePath] = []
+        messages: list[Message] = []
+        for i in range(0, len(frames), 3):
+            kind, path, data = frames[i : i + 3]
+            if kind not in COMMANDS:
+                continue
+            node_path = split_path(path)
+            messages.append(self._apply(kind, node_path, data))
+            paths.append(node_path)
+        for browser in list(self.browsers):
+            browser.write_latest(paths, messages)
+
+    def _apply(self, kind: bytes, path: NodePath, data: bytes) -> Message:
+        """Keep the command in the tree; returns what to send to browsers."""
+        if kind == b"delete":
+            self.tree.delete(path)
+            return data
+        node = self.tree.find(path)
+        if kind == b"set_object":
+            node.object = share_mesh(data) or data
+            return node.object
+        if kind == b"set_transform":
+            node.transform = data
+        elif kind == b"set_property":
+            node.properties[str(umsgpack.unpackb(data).get("property"))] = data
+        else:
+            node.animation = data
+        return data
+
+
+def meshcat_page_folder() -> Path:
+    """MeshCat's ``viewer/dist`` folder (index.html, main.min.js), found without importing it."""
+    spec = importlib.util.find_spec("meshcat")
+    if spec is None or spec.origin is None:
+        raise FileNotFoundError("the meshcat package is not installed")
+    return Path(spec.origin).parent / "viewer" / "dist"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="armfleet viewer server (loopback only)")
+    parser.add_argument("--web-port", type=int, default=0)
+    parser.add_argument("--parent-pid", type=int, default=None)
+    args = parser.parse_args(argv)
+    # Ctrl-C reaches the whole process group: the parent decides when this ends.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        bridge = Bridge(args.web_port, args.parent_pid)
+    except (OSError, zmq.ZMQError) as exc:
+        where = f"{LOOPBACK}:{args.web_port}" if args.web_port else LOOPBACK
+        print(json.dumps({"error": f"cannot listen on {where}: {exc}"}), flush=True)
+        return 1
+    print(json.dumps({"web_port": bridge.web_port, "zmq_port": bridge.zmq_port}), flush=True)
+    # Nothing else goes to the parent's pipe.
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    bridge.serve()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

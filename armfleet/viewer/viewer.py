@@ -1,0 +1,345 @@
+"""The MeshCat viewer of a world: live in the browser, exportable as a replay.
+
+:func:`start_viewer` starts it (``World(viewer=True)`` does); the world calls
+:meth:`Viewer.add_arm` when an arm is ready and :meth:`Viewer.tick` after
+every physics step. A tick costs next to nothing unless a display update is
+due (~30 Hz of wall time) or a replay frame (30 Hz of simulated time); the
+updates go to the server from a background thread, so neither the server nor
+a browser can slow the simulation down. A viewer that fails (its server died
+or hangs) stops itself; the simulation goes on and :attr:`Viewer.error` says why.
+
+Only the standard library and numpy are imported with this module: MeshCat,
+Pinocchio's visualizer, ZMQ and tornado load when a viewer starts.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from armfleet.viewer.errors import ViewerError, ViewerTimeout
+
+if TYPE_CHECKING:
+    from armfleet.arm import Arm
+    from armfleet.viewer.arm_visual import ArmVisual
+    from armfleet.viewer.commands import Updates
+    from armfleet.viewer.connection import BridgeConnection
+    from armfleet.viewer.publisher import UpdatePublisher
+    from armfleet.viewer.recorder import Recorder
+    from armfleet.viewer.scene import Stage
+    from armfleet.viewer.server import ViewerServer
+    from armfleet.world import World
+
+logger = logging.getLogger("armfleet")
+
+#: Live updates per second of wall time.
+DISPLAY_RATE_HZ = 30.0
+#: Time a save may wait for the server's scene [s].
+SCENE_TIMEOUT_S = 60.0
+
+
+def start_viewer(
+    port: int | None = None, *, show_frames: bool = False, show_targets: bool = True
+) -> tuple[Viewer | None, str | None]:
+    """Start a viewer; never raises because its server could not start.
+
+    Args:
+        port: web port on 127.0.0.1; a free one if None.
+        show_frames: show each arm's ``base_link`` and ``tool0`` frames.
+        show_targets: show a marker at ``tool0`` of each arm's motion target.
+
+    Returns:
+        ``(viewer, None)``, or ``(None, reason)`` if it could not start.
+    """
+    try:
+        return Viewer(port, show_frames=show_frames, show_targets=show_targets), None
+    except ImportError as exc:
+        reason = f"viewer unavailable: {exc}"
+    except ViewerError as exc:
+        reason = f"viewer could not start: {exc}"
+    logger.warning("%s", reason)
+    return None, reason
+
+
+class Viewer:
+    """A MeshCat server on 127.0.0.1 showing every arm of one world.
+
+    Prefer :func:`start_viewer`, which reports instead of raising.
+
+    Args:
+        port: web port on 127.0.0.1; a free one if None.
+        show_frames: show each arm's ``base_link`` and ``tool0`` frames.
+        show_targets: show a marker at ``tool0`` of each arm's motion target.
+        display_rate_hz: live updates per second of wall time.
+
+    Raises:
+        ViewerError: the server could not start or does not answer.
+    """
+
+    def __init__(
+        self,
+        port: int | None = None,
+        *,
+        show_frames: bool = False,
+        show_targets: bool = True,
+        display_rate_hz: float = DISPLAY_RATE_HZ,
+    ) -> None:
+        import meshcat
+        import zmq
+
+        from armfleet.viewer.publisher import UpdatePublisher
+        from armfleet.viewer.recorder import Recorder
+        from armfleet.viewer.scene import Stage
+        from armfleet.viewer.server import ViewerServer
+
+        self._server: ViewerServer = ViewerServer.start(port)
+        self._context: Any = zmq.Context()
+        self._connection: BridgeConnection | None = None
+        self._publisher: UpdatePublisher | None = None
+        self._visuals: dict[str, ArmVisual] = {}
+        self._recorder: Recorder = Recorder()
+        self._lock = threading.RLock()
+        self._period_s = 1.0 / display_rate_hz
+        self._next_display_s = 0.0
+        self._show_frames = show_frames
+        self._show_targets = show_targets
+        self._error: str | None = None
+        self._live = True
+        self._closed = False
+        try:
+            self._connection = self._connect()
+            self._connection.request([b"ping"])
+            self._visualizer: Any = meshcat.Visualizer(window=self._connection)
+            self._stage: Stage = Stage(self._visualizer)
+            self._stage.frame([])
+            self._publisher = UpdatePublisher(
+                self._connect, self._on_publish_error, 2 * self._period_s, self._refresh_updates
+            )
+        except BaseException:
+            self.close()
+            raise
+
+    def _connect(self) -> BridgeConnection:
+        from armfleet.viewer.connection import BridgeConnection
+
+        return BridgeConnection(self._context, self._server.zmq_url, self._server.url)
+
+    # -- properties ---------------------------------------------------------------------
+    @property
+    def url(self) -> str:
+        """The page: ``http://127.0.0.1:<port>/static/``."""
+        return self._server.url
+
+    @property
+    def port(self) -> int:
+        """Web port on 127.0.0.1."""
+        return self._server.web_port
+
+    @property
+    def server_pid(self) -> int:
+        """Process id of the server."""
+        return self._server.pid
+
+    @property
+    def error(self) -> str | None:
+        """Why the viewer stopped, or None while it works."""
+        return self._error
+
+    @property
+    def arms(self) -> tuple[str, ...]:
+        """Names of the arms shown."""
+        return tuple(self._visuals)
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def mesh_count(self, name: str) -> int:
+        """Number of visual meshes of arm ``name`` in the scene."""
+        visual = self._visuals.get(name)
+        return 0 if visual is None else len(visual.geometry_paths)
+
+    # -- arms ---------------------------------------------------------------------------
+    def add_arm(self, arm: Arm) -> None:
+        """Load ``arm``'s meshes under ``/meshcat/armfleet/<name>`` and follow it.
+
+        Never raises for viewer trouble: the arm is then simply not shown.
+        """
+        if not self._live:
+            return
+        from armfleet.viewer.arm_visual import ArmVisual
+
+        try:
+            with self._lock:
+                visual = ArmVisual(arm, self._visualizer, self._show_frames, self._show_targets)
+                self._visuals[arm.name] = visual
+                self._recorder.add(arm.name)
+                self._frame_camera()
+        except ViewerError as exc:
+            self._fail(str(exc))
+        except (RuntimeError, ValueError, OSError) as exc:  # Pinocchio/MeshCat loading
+            logger.warning("viewer: cannot show %s: %s", arm.name, exc)
+
+    def remove_arm(self, name: str) -> None:
+        """Remove arm ``name`` from the scene (and from the replay)."""
+        with self._lock:
+            visual = self._visuals.pop(name, None)
+            self._recorder.remove(name)
+        if visual is None:
+            return
+        visual.close()
+        if not self._live or self._publisher is None:
+            return
+        self._publisher.discard(visual.node)
+        try:
+            with self._lock:
+                self._visualizer[f"armfleet/{name}"].delete()
+                self._frame_camera()
+        except ViewerError as exc:
+            self._fail(str(exc))
+
+    def show_frames(self, visible: bool = True) -> None:
+        """Show or hide every arm's ``base_link`` and ``tool0`` frames."""
+        self._show_frames = visible
+        self._set_group_visible("landmarks", visible)
+
+    def show_targets(self, visible: bool = True) -> None:
+        """Show or hide the markers at ``tool0`` of the arms' motion targets."""
+        self._show_targets = visible
+        self._set_group_visible("targets", visible)
+
+    def _set_group_visible(self, group: str, visible: bool) -> None:
+        if not self._live:
+            return
+        try:
+            with self._lock:
+                for name in self._visuals:
+                    self._visualizer[f"armfleet/{name}/{group}"].set_property("visible", visible)
+        except ViewerError as exc:
+            self._fail(str(exc))
+
+    # -- live updates -------------------------------------------------------------------
+    def tick(self, world: World) -> None:
+        """Called after every physics step; does work only when a frame is due."""
+        if not self._live:
+            return
+        if world.time >= self._recorder.next_time_s:
+            self._record(world.time)
+        if time.perf_counter() >= self._next_display_s:
+            self._display()
+
+    def refresh(self, timeout_s: float = 5.0) -> bool:
+        """Send the current pose of every arm now and wait until the server has it.
+
+        The viewer also does this by itself once the simulation pauses.
+
+        Returns:
+            Whether the server got it within ``timeout_s``.
+        """
+        if not self._live or self._publisher is None:
+            return False
+        self._publisher.offer(self._refresh_updates())
+        return self._publisher.flush(timeout_s)
+
+    def _record(self, time_s: float) -> None:
+        positions = {name: visual.arm.body.position for name, visual in self._visuals.items()}
+        self._recorder.record(time_s, positions)
+
+    def _display(self) -> None:
+        self._next_display_s = time.perf_counter() + self._period_s
+        updates = self._refresh_updates()
+        if updates and self._publisher is not None:
+            self._publisher.offer(updates)
+
+    def _refresh_updates(self) -> Updates:
+        updates: Updates = {}
+        with self._lock:
+            for visual in self._visuals.values():
+                visual.collect(updates)
+        return updates
+
+    def _on_publish_error(self, error: ViewerError) -> bool:
+        if isinstance(error, ViewerTimeout) and self._server.running:
+            logger.warning("viewer: %s; frames are dropped until it answers", error)
+            return True
+        self._fail(str(error))
+        return False
+
+    def _fail(self, reason: str) -> None:
+        if self._live:
+            self._live = False
+            self._error = reason
+            logger.warning("viewer stopped: %s; the simulation goes on without it", reason)
+
+    # -- scene --------------------------------------------------------------------------
+    def _frame_camera(self) -> None:
+        self._stage.frame([visual.bounds() for visual in self._visuals.values()])
+
+    def save(self, path: str | Path) -> Path:
+        """Write a standalone HTML replay of the run so far (plays from ``file://``).
+
+        The page holds the scene and a MeshCat animation with one track set
+        per arm shown now, at 30 frames per simulated second.
+
+        Raises:
+            ViewerError: the viewer is not running, or the file cannot be written.
+        """
+        from armfleet.viewer.commands import property_command
+        from armfleet.viewer.recorder import Track
+        from armfleet.viewer.replay import RecordedArm, replay_html
+
+        if not self._live or self._connection is None:
+            raise ViewerError(f"the viewer is not running ({self._error or 'closed'})")
+        target = Path(path)
+        try:
+            scene = self._connection.request([b"scene"], SCENE_TIMEOUT_S)[1:]
+        except ViewerError as exc:
+            self._fail(str(exc))
+            raise
+        with self._lock:
+            tracks = self._recorder.tracks
+            arms = [
+                RecordedArm(visual, Track(tracks[name].first_frame, list(tracks[name].positions)))
+                for name, visual in self._visuals.items()
+            ]
+            hidden = [
+                property_command(f"{visual.node}/targets", "visible", False)[1]
+                for visual in self._visuals.values()
+            ]
+            html = replay_html(scene, arms, self._recorder.fps, hidden)
+        try:
+            target.write_text(html, encoding="utf-8")
+        except OSError as exc:
+            raise ViewerError(f"cannot write the replay to {target}: {exc}") from exc
+        return target
+
+    # -- lifetime -----------------------------------------------------------------------
+    def close(self) -> None:
+        """Stop the live updates and the server process; idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self._live = False
+        try:
+            if self._publisher is not None:
+                self._publisher.stop()
+            for visual in self._visuals.values():
+                visual.close()
+            if self._connection is not None:
+                self._connection.close()
+            self._context.destroy(linger=0)
+        finally:
+            self._server.stop()
+
+    def __enter__(self) -> Viewer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else (self._error or "running")
+        return f"Viewer({self.url!r}, arms={list(self._visuals)}, {state})"
