@@ -1,0 +1,41 @@
+"""The live world API: serve a running world over ZeroMQ, command and watch it from elsewhere.
+
+>>> import armfleet
+>>> client = armfleet.connect()              # the world `armfleet spawn` started
+>>> bob = client.arm("bob")
+>>> bob.move_to(bob.positions + 0.2); bob.wait()
+>>> client.close()
+"""
+
+from armfleet.remote.client import Client, connect
+from armfleet.remote.errors import (
+    ConnectionLost,
+    NoWorldFound,
+    ProtocolError,
+    RemoteError,
+    RequestTimeout,
+    UnknownTopic,
+)
+from armfleet.remote.remote_arm import RemoteArm
+from armfleet.remote.remote_subscription import RemoteSubscription
+from armfleet.remote.run_state import RunState
+from armfleet.remote.server import WorldServer, serve
+from armfleet.remote.world_info import TopicInfo, WorldInfo
+
+__all__ = [
+    "Client",
+    "ConnectionLost",
+    "NoWorldFound",
+    "ProtocolError",
+    "RemoteArm",
+    "RemoteError",
+    "RemoteSubscription",
+    "RequestTimeout",
+    "RunState",
+    "TopicInfo",
+    "UnknownTopic",
+    "WorldInfo",
+    "WorldServer",
+    "connect",
+    "serve",
+]

@@ -1,0 +1,273 @@
+"""``armfleet.connect()``: command and watch a running world from another process."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import zmq
+
+from armfleet import __version__
+from armfleet.errors import ArmfleetError
+from armfleet.messages import JointCommand, Positions
+from armfleet.remote import runtime_file
+from armfleet.remote.address import normalize_address
+from armfleet.remote.errors import NoWorldFound, RequestTimeout
+from armfleet.remote.protocol import DEFAULT_QUEUE_SIZE, HARD_FRAME_LIMIT_BYTES, PROTOCOL_VERSION
+from armfleet.remote.remote_arm import RemoteArm
+from armfleet.remote.remote_subscription import RemoteSubscription
+from armfleet.remote.request_channel import RequestChannel
+from armfleet.remote.stream_receiver import StreamReceiver
+from armfleet.remote.world_info import TopicInfo, WorldInfo
+from armfleet.spawn_pose import SpawnPose
+
+#: Wait for most requests [s].
+DEFAULT_TIMEOUT_S = 5.0
+#: Wait for a spawn: it queues behind other bring-ups [s].
+SPAWN_TIMEOUT_S = 120.0
+
+
+class Client:
+    """A connection to a running world, shaped like the in-process API.
+
+    Use :func:`connect` to make one. Calls are safe from several threads (they
+    take turns); subscription callbacks run in the client's stream thread.
+
+    Args:
+        address: ``tcp://HOST:PORT`` of the world.
+        timeout: default wait for a reply [s].
+    """
+
+    def __init__(self, address: str, timeout: float = DEFAULT_TIMEOUT_S) -> None:
+        self.address = address
+        self.timeout = timeout
+        self._context: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+        self._context.setsockopt(zmq.MAXMSGSIZE, HARD_FRAME_LIMIT_BYTES)
+        self._channel = RequestChannel(self._context, address)
+        self._stream: StreamReceiver | None = None
+        self._closed = False
+
+    def call(
+        self, op: str, args: dict[str, Any] | None = None, timeout: float | None = None
+    ) -> Any:
+        """Send request ``op`` with ``args`` and return the world's result (low level)."""
+        return self._channel.call(op, args, self.timeout if timeout is None else timeout)
+
+    def hello(self, timeout: float | None = None) -> dict[str, Any]:
+        """Check that the world answers and speaks this client's protocol."""
+        args = {"protocol": PROTOCOL_VERSION, "client": __version__}
+        result: dict[str, Any] = self.call("hello", args, timeout)
+        return result
+
+    # -- the world --------------------------------------------------------------------
+    def info(self) -> WorldInfo:
+        """Simulated time, step, real-time factor, paused or not, arms."""
+        return WorldInfo.from_wire(self.call("info"))
+
+    def pause(self) -> float:
+        """Stop stepping at the next step boundary (requests are still served);
+        return the simulated time it stopped at [s]."""
+        return float(self.call("pause")["time_s"])
+
+    def resume(self) -> float:
+        return float(self.call("resume")["time_s"])
+
+    def step(self, count: int = 1) -> float:
+        """Advance a paused world ``count`` steps; return its simulated time [s]."""
+        timeout = max(self.timeout, 1e-3 * count)
+        return float(self.call("step", {"count": count}, timeout)["time_s"])
+
+    # -- arms -------------------------------------------------------------------------
+    @property
+    def arms(self) -> dict[str, RemoteArm]:
+        """Arms by name, in bring-up order."""
+        return {d["name"]: RemoteArm(self, d) for d in self.call("arms")}
+
+    def arm(self, name: str) -> RemoteArm:
+        """The arm ``name``; raises if the world has none such."""
+        return RemoteArm(self, self.call("arm", {"name": name}))
+
+    def spawn(
+        self,
+        name: str,
+        model: str = "panda",
+        at: Sequence[float] | SpawnPose | str = (0.0, 0.0),
+        *,
+        initial_positions: Positions | None = None,
+        parameters: Mapping[str, Mapping[str, float]] | None = None,
+        timeout: float = SPAWN_TIMEOUT_S,
+    ) -> RemoteArm:
+        """Bring an arm up in the world (after any bring-up already queued) and return it.
+
+        Args:
+            name: arm name (``^[a-z][a-z0-9_]*$``), unique in the world.
+            model: one of the world's models (``armfleet models``).
+            at: ``(x, y[, z[, yaw_deg]])`` [m, deg], a :class:`SpawnPose`, or ``"X,Y"``.
+            initial_positions: arm joint positions at spawn [rad]; the model's home if None.
+            parameters: per-controller parameter overrides for this arm.
+            timeout: wait for the arm to be ready [s].
+        """
+        args: dict[str, Any] = {"name": name, "model": model, "at": _pose(at)}
+        if initial_positions is not None:
+            args["initial_positions"] = [float(v) for v in initial_positions]
+        if parameters:
+            args["parameters"] = {c: dict(values) for c, values in parameters.items()}
+        return RemoteArm(self, self.call("spawn", args, timeout))
+
+    def remove(self, name: str) -> None:
+        """Take the arm ``name`` out of the world."""
+        self.call("remove", {"name": name})
+
+    # -- topics -----------------------------------------------------------------------
+    def topics(self) -> dict[str, TopicInfo]:
+        """The world's topics by name."""
+        return {
+            t["topic"]: TopicInfo(t["topic"], t["type"], bool(t["command"]))
+            for t in self.call("topics")
+        }
+
+    def subscribe(
+        self,
+        topic: str,
+        callback: Callable[[Any], None],
+        rate_hz: float | None = None,
+        *,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+    ) -> RemoteSubscription:
+        """Call ``callback(message)`` for messages on ``topic`` (a message class of
+        :mod:`armfleet.messages`, as in the world), in the client's stream thread.
+
+        Args:
+            rate_hz: at most this many messages per second of wall time; all if None.
+            queue_size: messages kept for a slow callback; the oldest are dropped
+                beyond (see :attr:`RemoteSubscription.dropped`).
+        """
+        stream = self._open_stream()
+        local = stream.add(topic, callback, queue_size)
+        args: dict[str, Any] = {
+            "topic": topic,
+            "stream": stream.token,
+            "sub": local.key,
+            "queue_size": queue_size,
+        }
+        if rate_hz is not None:
+            args["rate_hz"] = rate_hz
+        try:
+            result = self.call("subscribe", args)
+        except BaseException:
+            stream.remove(local.key)
+            raise
+        return RemoteSubscription(local, str(result["type"]), self._unsubscribe)
+
+    def publish(self, topic: str, message: JointCommand | Positions) -> None:
+        """Publish on a command topic (``/<arm>/position_controller/commands``); checked
+        by the world like :meth:`RemoteArm.move_to`."""
+        positions = message.positions if isinstance(message, JointCommand) else message
+        self.call("publish", {"topic": topic, "message": {"positions": _floats(positions)}})
+
+    def _open_stream(self) -> StreamReceiver:
+        if self._closed:
+            raise ArmfleetError("this client is closed")
+        if self._stream is None or not self._stream.alive:
+            self._stream = StreamReceiver(self._context, self.address, self.timeout)
+        return self._stream
+
+    def _unsubscribe(self, key: int) -> None:
+        stream = self._stream
+        if stream is None:
+            return
+        stream.remove(key)
+        with contextlib.suppress(ArmfleetError):  # the world may be gone already
+            self.call("unsubscribe", {"stream": stream.token, "sub": key})
+
+    # -- lifetime ---------------------------------------------------------------------
+    def close(self) -> None:
+        """Cancel the subscriptions and close the connection (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        stream_stopped = True
+        if self._stream is not None:
+            self._stream.close()
+            stream_stopped = not self._stream.alive
+        self._channel.close()
+        if stream_stopped:
+            self._context.term()
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Client({self.address!r})"
+
+
+def find_world(address: str | None = None) -> tuple[str, str]:
+    """The address to use and where it came from (for messages).
+
+    Raises:
+        NoWorldFound: no address given and no live world in the runtime file.
+    """
+    if address is not None:
+        return normalize_address(address), "given"
+    path = runtime_file.runtime_path()
+    entry = runtime_file.read_entry(path)
+    start = "start one with 'armfleet spawn bob --at 0,0', or give its address (--connect ADDR)"
+    if entry is None:
+        raise NoWorldFound(f"no running world found (no {path}); {start}")
+    if not entry.alive:
+        raise NoWorldFound(
+            f"no running world found ({path} names process {entry.pid}, which has ended); {start}"
+        )
+    return entry.address, f"named by {path}, process {entry.pid}"
+
+
+def connect(address: str | None = None, *, timeout: float = DEFAULT_TIMEOUT_S) -> Client:
+    """Connect to a running world.
+
+    Args:
+        address: ``tcp://HOST:PORT`` (or ``HOST:PORT``, ``PORT``); by default the
+            world named in the per-user runtime file (``armfleet spawn`` writes it).
+        timeout: default wait for replies, and for the world to answer now [s].
+
+    Raises:
+        NoWorldFound: no world runs, or none answers at ``address``.
+    """
+    resolved, source = find_world(address)
+    client = Client(resolved, timeout)
+    try:
+        client.hello()
+    except RequestTimeout:
+        client.close()
+        raise NoWorldFound(
+            f"no answer from a world at {resolved} ({source}) within {timeout:g} s"
+        ) from None
+    except BaseException:
+        client.close()
+        raise
+    return client
+
+
+def _pose(at: Sequence[float] | SpawnPose | str) -> Any:
+    if isinstance(at, str):
+        at = SpawnPose.parse(at)
+    if isinstance(at, SpawnPose):
+        return {
+            "x": at.x,
+            "y": at.y,
+            "z": at.z,
+            "yaw_deg": at.yaw_deg,
+            "roll_deg": at.roll_deg,
+            "pitch_deg": at.pitch_deg,
+        }
+    return _floats(at)
+
+
+def _floats(values: Any) -> list[Any]:
+    """Numbers as floats; anything else as given, for the world to name the problem."""
+    return [
+        float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v for v in values
+    ]

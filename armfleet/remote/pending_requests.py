@@ -1,0 +1,165 @@
+"""Requests handed to the stepping thread and not yet answered."""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import queue
+import time
+from collections.abc import Callable
+from concurrent.futures import Future, InvalidStateError
+from dataclasses import dataclass
+from typing import Any
+
+from armfleet.errors import ArmfleetError
+from armfleet.remote.errors import ConnectionLost, RequestTimeout
+from armfleet.remote.outbox import Outbox
+from armfleet.remote.protocol import Service
+from armfleet.remote.run_state import RunState
+from armfleet.remote.wakeup import Wakeup
+from armfleet.world import World
+
+
+@dataclass(eq=False)
+class _Pending:
+    peer: bytes
+    request_id: int | None
+    service: Service
+    future: Future[Any]
+    timeout_s: float
+    #: Cancel the work if it has not started by then (monotonic) [s]; None: never.
+    deadline: float | None
+    #: Turns the work's result into the reply, in the server thread.
+    finish: Callable[[Any], Any] | None = None
+
+
+class PendingRequests:
+    """Submits work to the world and answers each request once its future is done.
+
+    Futures complete in the stepping thread; their callbacks only queue the
+    request and wake the server thread, which replies.
+    """
+
+    def __init__(
+        self, world: World, outbox: Outbox, wakeup: Wakeup, run_state: RunState | None
+    ) -> None:
+        self._world = world
+        self._outbox = outbox
+        self._wakeup = wakeup
+        self._run_state = run_state
+        self._pending: dict[int, _Pending] = {}
+        self._completed: queue.SimpleQueue[int] = queue.SimpleQueue()
+        self._keys = itertools.count()
+        self._stopping = False
+
+    def submit(
+        self,
+        peer: bytes,
+        request_id: int | None,
+        service: Service,
+        work: Callable[[], Any],
+        timeout: float,
+        finish: Callable[[Any], Any] | None = None,
+    ) -> None:
+        """Run ``work`` at the next step boundary; cancel it if not started within ``timeout``."""
+        try:
+            future = self._world.submit(work)
+        except queue.Full:
+            raise ArmfleetError("the world has too many requests waiting; try again") from None
+        deadline = time.monotonic() + timeout
+        self._track(_Pending(peer, request_id, service, future, timeout, deadline, finish))
+
+    def wait(
+        self,
+        peer: bytes,
+        request_id: int | None,
+        check: Callable[[], Any],
+        timeout: float,
+        what: str,
+    ) -> None:
+        """Run ``check`` at every step boundary until it returns something (the reply)."""
+        outcome: Future[Any] = Future()
+        outcome.set_running_or_notify_cancel()
+        deadline = time.monotonic() + timeout
+
+        def settle(value: Any = None, error: BaseException | None = None) -> None:
+            with contextlib.suppress(InvalidStateError):
+                if error is not None:
+                    outcome.set_exception(error)
+                else:
+                    outcome.set_result(value)
+
+        def poll(previous: Future[Any] | None) -> None:
+            if previous is not None:
+                if previous.cancelled():
+                    settle(error=ConnectionLost("the world is shutting down"))
+                    return
+                error = previous.exception()
+                if error is not None or previous.result() is not None:
+                    settle(None if error else previous.result(), error)
+                    return
+            if time.monotonic() > deadline:
+                settle(error=RequestTimeout(f"{what} after {timeout:g} s"))
+            elif self._stopping:
+                settle(error=ConnectionLost("the world is shutting down"))
+            else:
+                try:
+                    self._world.submit(check).add_done_callback(poll)
+                except Exception as exc:
+                    settle(error=exc)
+
+        poll(None)
+        self._track(_Pending(peer, request_id, Service.WAIT, outcome, timeout, None))
+
+    def _track(self, pending: _Pending) -> None:
+        key = next(self._keys)
+        self._pending[key] = pending
+
+        def done(_: Future[Any]) -> None:  # any thread: the stepping one, usually
+            self._completed.put(key)
+            self._wakeup.signal()
+
+        pending.future.add_done_callback(done)
+        if self._run_state is not None:
+            self._run_state.wake()  # a loop sleeping between steps serves it at once
+
+    def answer_completed(self) -> None:
+        """Reply to every request whose work has finished."""
+        while True:
+            try:
+                key = self._completed.get_nowait()
+            except queue.Empty:
+                return
+            pending = self._pending.pop(key, None)
+            if pending is None:
+                continue  # answered already (expired)
+            try:
+                if pending.future.cancelled():
+                    raise ConnectionLost(f"{pending.service.value}: cancelled")
+                result = pending.future.result()
+                if pending.finish is not None:
+                    result = pending.finish(result)
+            except Exception as exc:
+                self._outbox.reply_error(pending.peer, pending.request_id, exc)
+                continue
+            self._outbox.reply(pending.peer, pending.request_id, result)
+
+    def expire(self) -> None:
+        """Cancel, with an error reply, work still queued past its deadline."""
+        now = time.monotonic()
+        for key, pending in tuple(self._pending.items()):
+            if pending.deadline is not None and now > pending.deadline and pending.future.cancel():
+                del self._pending[key]
+                error = RequestTimeout(
+                    f"{pending.service.value}: the world did not take the request up within "
+                    f"{pending.timeout_s:g} s (it is busy or not stepping); nothing was applied"
+                )
+                self._outbox.reply_error(pending.peer, pending.request_id, error)
+
+    def fail_all(self, reason: str) -> None:
+        """Cancel what has not started and answer every request with ``reason``."""
+        self._stopping = True
+        for pending in self._pending.values():
+            pending.future.cancel()
+            self._outbox.reply_error(pending.peer, pending.request_id, ConnectionLost(reason))
+        self._pending.clear()

@@ -1,0 +1,74 @@
+"""The wire protocol of the live world API: frames, limits and service names.
+
+One ZeroMQ ROUTER socket per world. A client talks to it through two DEALER
+sockets: one for requests (one frame each, one reply each), one for streams
+(topic messages pushed by the server). Every frame is one msgpack map:
+
+- request:  ``{"id": int, "op": str, "args": {...}, "timeout_s": float}``
+- reply:    ``{"kind": "reply", "id": int | None, "ok": true, "result": ...}``
+  or ``{"kind": "reply", "id": ..., "ok": false, "error": {"type": str, "message": str}}``
+- stream:   ``{"kind": "messages", "items": [[sub, dropped, type, message], ...]}``,
+  ``{"kind": "tick"}`` (every second, so both ends notice the other going away),
+  ``{"kind": "closing", "reason": str}``.
+
+Numbers are msgpack floats/ints, vectors are lists of floats: never pickle, never eval.
+"""
+
+from __future__ import annotations
+
+import enum
+
+#: Bumped on any incompatible change; ``hello`` refuses a client speaking another one.
+PROTOCOL_VERSION = 1
+#: Largest request the server reads; a larger one gets an error reply [bytes].
+MAX_REQUEST_BYTES = 256 * 1024
+#: Larger frames are cut off by ZeroMQ itself, which drops that connection [bytes].
+HARD_FRAME_LIMIT_BYTES = 16 * 1024 * 1024
+#: Most messages the server packs into one stream frame.
+MAX_BATCH = 256
+#: Period of the server's ``tick`` frames on every stream [s].
+TICK_PERIOD_S = 1.0
+#: A stream with no frame for this long has lost its world [s].
+STREAM_SILENCE_S = 4.0
+#: Messages a subscription holds for a slow client before dropping the oldest.
+DEFAULT_QUEUE_SIZE = 100
+MAX_QUEUE_SIZE = 10_000
+#: Subscriptions one stream may hold.
+MAX_SUBSCRIPTIONS_PER_STREAM = 256
+#: Streams one server serves at once.
+MAX_STREAMS = 256
+#: Longest time a request may wait in the world's queue, whatever the client asks [s].
+MAX_REQUEST_TIMEOUT_S = 600.0
+
+
+class Service(enum.Enum):
+    """Requests a world answers (the ``op`` of a request)."""
+
+    HELLO = "hello"
+    ATTACH = "attach"
+    INFO = "info"
+    ARMS = "arms"
+    ARM = "arm"
+    JOINT_STATE = "joint_state"
+    SPAWN = "spawn"
+    REMOVE = "remove"
+    MOVE = "move"
+    WAIT = "wait"
+    RESET = "reset"
+    TOPICS = "topics"
+    SUBSCRIBE = "subscribe"
+    UNSUBSCRIBE = "unsubscribe"
+    PUBLISH = "publish"
+    PAUSE = "pause"
+    RESUME = "resume"
+    STEP = "step"
+    DETACH = "detach"
+
+
+class FrameKind(enum.Enum):
+    """What a frame from the server carries."""
+
+    REPLY = "reply"
+    MESSAGES = "messages"
+    TICK = "tick"
+    CLOSING = "closing"

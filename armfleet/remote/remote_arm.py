@@ -1,0 +1,130 @@
+"""A client's handle on one arm of a running world, shaped like :class:`armfleet.Arm`."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from armfleet.errors import ArmfleetError
+from armfleet.messages import ArmMode, FloatArray, JointState, Positions
+from armfleet.remote.codec import decode_message
+from armfleet.spawn_pose import SpawnPose
+
+if TYPE_CHECKING:
+    from armfleet.remote.client import Client
+
+#: Default wait for a motion to finish [s of wall time].
+WAIT_TIMEOUT_S = 30.0
+
+
+class RemoteArm:
+    """One arm of the world a :class:`Client` is connected to.
+
+    Its name, model, pose, joint names and limits are read once; every other
+    property asks the world.
+    """
+
+    def __init__(self, client: Client, description: dict[str, Any]) -> None:
+        self._client = client
+        self._name = str(description["name"])
+        self._model = str(description["model"])
+        self._pose = SpawnPose(**description["pose"])
+        self._joint_names = tuple(description["joint_names"])
+        self._lower = np.asarray(description["lower"], dtype=float)
+        self._upper = np.asarray(description["upper"], dtype=float)
+
+    @property
+    def name(self) -> str:
+        return self._name
+
+    @property
+    def namespace(self) -> str:
+        return f"/{self._name}"
+
+    @property
+    def model(self) -> str:
+        return self._model
+
+    @property
+    def pose(self) -> SpawnPose:
+        """Spawn pose of ``<name>_base_link`` in the world."""
+        return self._pose
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Prefixed names of the joints :meth:`move_to` controls, base to tool."""
+        return self._joint_names
+
+    @property
+    def joint_limits(self) -> tuple[FloatArray, FloatArray]:
+        """(lower, upper) position limits of :attr:`joint_names` [rad or m]."""
+        return self._lower.copy(), self._upper.copy()
+
+    @property
+    def joint_state(self) -> JointState:
+        """The latest message of ``/<name>/joint_states`` (every movable joint)."""
+        state: JointState = decode_message(
+            "JointState", self._client.call("joint_state", {"name": self._name})
+        )
+        return state
+
+    @property
+    def positions(self) -> FloatArray:
+        """Current positions of :attr:`joint_names` [rad or m]."""
+        return np.asarray(self._describe()["positions"], dtype=float)
+
+    @property
+    def mode(self) -> ArmMode:
+        """Holding, moving, protective stop or error."""
+        return ArmMode(self._describe()["mode"])
+
+    @property
+    def is_moving(self) -> bool:
+        return self.mode is ArmMode.MOVING
+
+    def move_to(self, positions: Positions) -> None:
+        """Send target ``positions`` (one per :attr:`joint_names`); returns once the world
+        has accepted them, at a step boundary.
+
+        Raises:
+            RemoteError: the world refused them (wrong length, not finite, outside the
+                limits, protective stop...); the current motion goes on.
+        """
+        self._client.call("move", {"name": self._name, "positions": self._vector(positions)})
+
+    def wait(self, timeout: float = WAIT_TIMEOUT_S) -> JointState:
+        """Block until the motion is over and the arm holds its target; return its state.
+
+        Raises:
+            RemoteError: the arm stopped on a contact, faulted or left the world.
+            RequestTimeout: still moving after ``timeout`` [s of wall time].
+        """
+        result = self._client.call("wait", {"name": self._name}, timeout=timeout)
+        state: JointState = decode_message("JointState", result["joint_state"])
+        return state
+
+    def reset_stop(self) -> None:
+        """Accept commands again after a protective stop."""
+        self._client.call("reset", {"name": self._name, "stop_only": True})
+
+    def reset(self) -> None:
+        """Leave ``error`` (controllers restart at the current pose) and any stop."""
+        self._client.call("reset", {"name": self._name, "stop_only": False})
+
+    def _describe(self) -> dict[str, Any]:
+        description: dict[str, Any] = self._client.call("arm", {"name": self._name})
+        return description
+
+    def _vector(self, positions: Positions) -> list[float]:
+        try:
+            values: list[float] = np.asarray(positions, dtype=float).reshape(-1).tolist()
+        except (TypeError, ValueError):
+            raise ArmfleetError(
+                f"{self._name}: targets must be numbers, one per joint: "
+                f"{', '.join(self._joint_names)}"
+            ) from None
+        return values
+
+    def __repr__(self) -> str:
+        return f"RemoteArm({self._name!r}, model={self._model!r}, pose={self._pose})"

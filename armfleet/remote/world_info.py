@@ -1,0 +1,66 @@
+"""What a client learns about a world and its topics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class WorldInfo:
+    """A running world, as :meth:`Client.info` reports it.
+
+    Attributes:
+        time_s: simulated time [s].
+        dt_s: physics step [s].
+        realtime_factor: simulated over wall time lately (0 when paused; None if unknown).
+        paused: whether the world is paused.
+        arms: arm names, in bring-up order.
+        version: armfleet version of the world.
+        address: API address.
+        pid: process of the world.
+        streams: clients receiving topics.
+        subscriptions: their subscriptions.
+    """
+
+    time_s: float
+    dt_s: float
+    realtime_factor: float | None
+    paused: bool
+    arms: tuple[str, ...]
+    version: str
+    address: str
+    pid: int
+    streams: int
+    subscriptions: int
+
+    @classmethod
+    def from_wire(cls, data: dict[str, Any]) -> WorldInfo:
+        rtf = data.get("realtime_factor")
+        return cls(
+            time_s=float(data["time_s"]),
+            dt_s=float(data["dt_s"]),
+            realtime_factor=None if rtf is None else float(rtf),
+            paused=bool(data["paused"]),
+            arms=tuple(data["arms"]),
+            version=str(data["version"]),
+            address=str(data["address"]),
+            pid=int(data["pid"]),
+            streams=int(data.get("streams", 0)),
+            subscriptions=int(data.get("subscriptions", 0)),
+        )
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    """One topic of a world.
+
+    Attributes:
+        topic: its name.
+        type_name: its message type (a class of :mod:`armfleet.messages`).
+        command: whether clients may publish on it (:meth:`Client.publish`).
+    """
+
+    topic: str
+    type_name: str
+    command: bool
