@@ -1,4 +1,5 @@
-"""Run a :class:`FleetSpec` from the command line: bring-up lines, status, clean shutdown."""
+"""Run a :class:`FleetSpec` from the command line: bring-up lines, live API, status, clean
+shutdown."""
 
 from __future__ import annotations
 
@@ -6,21 +7,22 @@ import argparse
 import signal
 import sys
 import time
-from collections.abc import Callable
 from types import FrameType
 
+from armfleet.cli.api_options import check_api_arguments, start_api
 from armfleet.cli.status_line import status_line
+from armfleet.cli.world_loop import run_world
 from armfleet.launch import launch
 from armfleet.messages import BringupEvent
+from armfleet.remote import RunState
 from armfleet.spec import FleetSpec
 from armfleet.world import World
-
-STATUS_PERIOD_S = 1.0
-CHUNK_S = 0.02
 
 
 def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
     """Bring the spec's arms up, run until ``--duration`` or Ctrl-C/SIGTERM, close cleanly."""
+    if hasattr(args, "api_port"):
+        check_api_arguments(args)
     viewer = (spec.world.viewer and not args.no_viewer) or args.record is not None
     realtime = spec.world.realtime if args.realtime is None else args.realtime
 
@@ -50,7 +52,24 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
         world = launch(spec, viewer=viewer, viewer_port=args.viewer_port, before_spawn=before_spawn)
         try:
             say(f"{len(spec.arms)} arm(s) ready in {time.perf_counter() - started:.2f}s")
-            _run(world, args.duration, realtime, say)
+            # The API starts once the spec's arms are up: a client's spawn then never
+            # lands in the middle of the spec's bring-up.
+            run_state = RunState()
+            server = start_api(world, run_state, args)
+            try:
+                run_world(
+                    world,
+                    run_state,
+                    args.duration,
+                    realtime,
+                    on_status=lambda rtf: say(status_line(world, rtf)),
+                    on_pause=lambda paused: say(
+                        f"{'paused' if paused else 'resumed'} at t={world.time:.3f}s"
+                    ),
+                )
+            finally:
+                if server is not None:
+                    server.close()
         finally:
             if args.record is not None and world.viewer is not None:
                 world.viewer.save(args.record)
@@ -59,19 +78,3 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         say("interrupted; shut down cleanly")
     return 0
-
-
-def _run(world: World, duration: float | None, realtime: bool, say: Callable[[str], None]) -> None:
-    start_sim, start_wall = world.time, time.perf_counter()
-    next_status = start_wall + STATUS_PERIOD_S
-    while duration is None or world.time - start_sim < duration - 1e-9:
-        chunk = CHUNK_S if duration is None else min(CHUNK_S, duration - (world.time - start_sim))
-        world.run(chunk)
-        now = time.perf_counter()
-        elapsed_sim = world.time - start_sim
-        if realtime and elapsed_sim > now - start_wall:
-            time.sleep(elapsed_sim - (now - start_wall))
-            now = time.perf_counter()
-        if now >= next_status:
-            say(status_line(world, elapsed_sim / max(now - start_wall, 1e-9)))
-            next_status = now + STATUS_PERIOD_S

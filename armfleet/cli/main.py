@@ -7,7 +7,17 @@ import sys
 from collections.abc import Sequence
 
 from armfleet import __version__
-from armfleet.cli import launch_command, models_command, spawn_command
+from armfleet.cli import (
+    arms_command,
+    launch_command,
+    models_command,
+    move_command,
+    remove_command,
+    spawn_command,
+    topic_command,
+    world_commands,
+)
+from armfleet.cli.api_options import add_api_arguments
 from armfleet.cli.parser import OneLineParser, UsageError, fail
 from armfleet.errors import ArmfleetError
 
@@ -19,7 +29,15 @@ def build_parser() -> OneLineParser:
     subparsers = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     spawn_command.add_parser(subparsers)
     launch_command.add_parser(subparsers)
+    # Every command that starts a world serves the live API.
+    for command in ("spawn", "launch"):
+        add_api_arguments(subparsers.choices[command])
     models_command.add_parser(subparsers)
+    arms_command.add_parser(subparsers)
+    move_command.add_parser(subparsers)
+    remove_command.add_parser(subparsers)
+    topic_command.add_parser(subparsers)
+    world_commands.add_parsers(subparsers)
     parser.commands = tuple(subparsers.choices)
     return parser
 

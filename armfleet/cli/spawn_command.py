@@ -1,10 +1,13 @@
-"""``armfleet spawn``: arms typed on the command line, brought up like a launch spec."""
+"""``armfleet spawn``: arms typed on the command line, brought up like a launch spec, in
+a new world or, when one is running, in that one."""
 
 from __future__ import annotations
 
 import argparse
 
+from armfleet.cli.api_options import add_connect_arguments
 from armfleet.cli.fleet_runner import run_fleet
+from armfleet.cli.join_world import add_to_world, running_world
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.description import ModelLibrary
@@ -17,9 +20,10 @@ from armfleet.spec import ArmSpec, FleetSpec
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     parser = subparsers.add_parser(
         "spawn",
-        help="bring arms up one at a time in a new world and run it",
+        help="bring arms up one at a time in a new world and run it (or in the running one)",
         description="Bring arms up one at a time in one PyBullet world and run it "
-        "until --duration or Ctrl-C.",
+        "until --duration or Ctrl-C. When a world is already running (see 'armfleet info'), "
+        "the arms are added to it instead, unless --new-world.",
     )
     parser.add_argument("names", nargs="+", metavar="NAME", help="arm names, e.g. bob toby")
     parser.add_argument(
@@ -31,6 +35,11 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help="one model for all arms or one per name (default: panda; see 'armfleet models')",
     )  # fmt: skip
     add_run_arguments(parser)
+    parser.add_argument(
+        "--new-world", action="store_true",
+        help="start a new world even if one is running",
+    )  # fmt: skip
+    add_connect_arguments(parser)
     parser.set_defaults(run=run)
 
 
@@ -60,4 +69,9 @@ def spec_from_arguments(args: argparse.Namespace, models: ModelLibrary) -> Fleet
 
 def run(args: argparse.Namespace) -> int:
     check_run_arguments(args)
-    return run_fleet(spec_from_arguments(args, ModelLibrary()), args)
+    spec = spec_from_arguments(args, ModelLibrary())
+    client = running_world(args)
+    if client is None:
+        return run_fleet(spec, args)
+    with client:
+        return add_to_world(client, spec, args.quiet)

@@ -1,0 +1,96 @@
+"""The live API on the command line: serving it from a world, reaching it from a client."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.remote import Client, RunState, WorldServer, connect
+from armfleet.remote.address import DEFAULT_BIND, check_bind_host
+from armfleet.remote.client import DEFAULT_TIMEOUT_S
+from armfleet.world import World
+
+
+# -- commands that start a world ---------------------------------------------------------
+def add_api_arguments(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("live API (armfleet arms, move, topic ... talk to it)")
+    group.add_argument(
+        "--api-bind", default=DEFAULT_BIND, metavar="HOST",
+        help=f"address the API listens on (default {DEFAULT_BIND}: this machine only); any "
+        "other lets other machines command the world",
+    )  # fmt: skip
+    group.add_argument(
+        "--api-port", type=int, default=0, metavar="PORT",
+        help="TCP port of the API (default: a free one)",
+    )  # fmt: skip
+    group.add_argument("--no-api", action="store_true", help="do not serve the live API")
+
+
+def check_api_arguments(args: argparse.Namespace) -> None:
+    if not 0 <= args.api_port <= 65535:
+        raise UsageError(
+            f"--api-port {args.api_port} is invalid; give 1-65535, or 0 for a free one"
+        )
+    check_bind_host(args.api_bind)
+
+
+def start_api(world: World, run_state: RunState, args: argparse.Namespace) -> WorldServer | None:
+    """Serve ``world`` as the options say; print its address (and a warning if exposed)."""
+    if getattr(args, "no_api", False):
+        return None
+    server = WorldServer(
+        world,
+        run_state,
+        host=getattr(args, "api_bind", DEFAULT_BIND),
+        port=getattr(args, "api_port", 0),
+    )
+    print(f"api: {server.address}", flush=True)
+    if server.exposed:
+        print(
+            f"armfleet: warning: the live API listens on {server.address}: anyone who can reach "
+            "this machine there can command its arms",
+            file=sys.stderr,
+            flush=True,
+        )
+    if server.runtime_path is None:
+        print(
+            "armfleet: note: another running world is the default for clients; reach this one "
+            f"with --connect {server.local_address}",
+            file=sys.stderr,
+            flush=True,
+        )
+    return server
+
+
+# -- client commands ---------------------------------------------------------------------
+def add_connect_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--connect", metavar="ADDR", default=None,
+        help="address of the world's API, tcp://HOST:PORT (default: the running world, "
+        "found through the per-user runtime file)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--timeout", type=float, default=DEFAULT_TIMEOUT_S, metavar="S",
+        help=f"wait for the world's answers [s] (default {DEFAULT_TIMEOUT_S:g})",
+    )  # fmt: skip
+
+
+def connect_from(args: argparse.Namespace) -> Client:
+    """Connect as ``--connect``/``--timeout`` say."""
+    timeout: float = args.timeout
+    if not (math.isfinite(timeout) and timeout > 0):
+        raise UsageError(f"--timeout {timeout} is invalid; give seconds > 0")
+    return connect(args.connect, timeout=timeout)
+
+
+def add_remote_command(
+    subparsers: argparse._SubParsersAction[OneLineParser], name: str, help_text: str
+) -> OneLineParser:
+    """A client command: ``--connect`` and ``--timeout`` included."""
+    parser = subparsers.add_parser(
+        name, help=help_text, description=help_text[0].upper() + help_text[1:] + "."
+    )
+    add_connect_arguments(parser)
+    return parser

@@ -1,0 +1,29 @@
+"""``armfleet arms``: the arms of the running world and what they are doing."""
+
+from __future__ import annotations
+
+import argparse
+
+from armfleet.cli.api_options import add_remote_command, connect_from
+from armfleet.cli.parser import OneLineParser
+
+
+def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
+    parser = add_remote_command(subparsers, "arms", "list the arms of the running world")
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    with connect_from(args) as client:
+        arms = client.call("arms")
+        info = client.info()
+    print(f"{'name':<12} {'model':<8} {'mode':<16} {'at (x, y, z [m], yaw [deg])':<28} q [rad]")
+    for arm in arms:
+        pose = arm["pose"]
+        at = f"{pose['x']:.2f}, {pose['y']:.2f}, {pose['z']:.2f}, {pose['yaw_deg']:.0f}"
+        q = " ".join(f"{v:+.3f}" for v in arm["positions"])
+        mode = arm["mode"] + (f" ({arm['reason']})" if arm["reason"] else "")
+        print(f"{arm['name']:<12} {arm['model']:<8} {mode:<16} {at:<28} [{q}]")
+    state = "paused" if info.paused else "running"
+    print(f"({len(arms)} arm(s); t={info.time_s:.3f}s, {state}, {client.address})")
+    return 0

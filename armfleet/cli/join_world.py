@@ -1,0 +1,97 @@
+"""``armfleet spawn`` when a world already runs: add the arms to it instead of a new world."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import queue
+import sys
+
+from armfleet.cli.parser import UsageError
+from armfleet.messages import BringupEvent, BringupStage
+from armfleet.remote import Client, NoWorldFound, connect, runtime_file
+from armfleet.remote.address import DEFAULT_BIND
+from armfleet.spec import FleetSpec
+
+#: How long an unasked-for world in the runtime file may take to answer [s].
+PROBE_TIMEOUT_S = 2.0
+#: Wait for the last bring-up event once the spawn has returned [s].
+EVENT_GRACE_S = 2.0
+#: Options that only make sense for a new world: (flag, attribute, default).
+_NEW_WORLD_OPTIONS = (
+    ("--duration", "duration", None),
+    ("--realtime/--fast", "realtime", None),
+    ("--no-viewer", "no_viewer", False),
+    ("--viewer-port", "viewer_port", None),
+    ("--record", "record", None),
+    ("--api-bind", "api_bind", DEFAULT_BIND),
+    ("--api-port", "api_port", 0),
+    ("--no-api", "no_api", False),
+)
+
+
+def running_world(args: argparse.Namespace) -> Client | None:
+    """The world to add the arms to: ``--connect``'s, else the runtime file's if it
+    answers; None for a new world (``--new-world``, or none running)."""
+    if args.new_world:
+        if args.connect is not None:
+            raise UsageError("--new-world and --connect exclude each other")
+        return None
+    if args.connect is not None:
+        client = connect(args.connect, timeout=args.timeout)
+    else:
+        entry = runtime_file.live_entry()
+        if entry is None:
+            return None
+        try:
+            client = connect(entry.address, timeout=PROBE_TIMEOUT_S)
+        except NoWorldFound:
+            print(
+                f"armfleet: note: the world named by {entry.path} (process {entry.pid}) does not "
+                "answer; starting a new one",
+                file=sys.stderr,
+            )
+            return None
+        client.timeout = args.timeout
+    given = [flag for flag, name, default in _NEW_WORLD_OPTIONS if getattr(args, name) != default]
+    if given:
+        client.close()
+        raise UsageError(
+            f"{', '.join(given)} set options of a new world, but a world is running at "
+            f"{client.address}; drop them to add the arms to it, or add --new-world"
+        )
+    return client
+
+
+def add_to_world(client: Client, spec: FleetSpec, quiet: bool) -> int:
+    """Spawn the spec's arms in the running world, one after the other, showing their stages."""
+    names = {arm.name for arm in spec.arms}
+    events: queue.Queue[BringupEvent] = queue.Queue()
+    subscription = client.subscribe("/bringup", events.put, queue_size=1000)
+    try:
+        for arm in spec.arms:
+            client.spawn(arm.name, arm.model, arm.pose)
+            _show_stages(events, arm.name, names, quiet)
+            if not quiet:
+                print(f"{arm.name} ready in the world at {client.address}", flush=True)
+    finally:
+        subscription.cancel()
+    return 0
+
+
+def _show_stages(events: queue.Queue[BringupEvent], name: str, ours: set[str], quiet: bool) -> None:
+    """Print our arms' stages until ``name`` is ready (events may trail the reply a little)."""
+    while True:
+        try:
+            event = events.get(timeout=EVENT_GRACE_S)
+        except queue.Empty:
+            return
+        if event.arm in ours and not quiet:
+            with contextlib.suppress(BrokenPipeError):
+                print(
+                    f"[{event.arm}] {event.stage.value} (t={event.stamp:.3f}s, "
+                    f"{event.wall_time:.2f}s)",
+                    flush=True,
+                )
+        if event.arm == name and event.stage is BringupStage.READY:
+            return
