@@ -22,6 +22,7 @@ from armfleet.messages import (
     TFMessage,
     TransformStamped,
 )
+from armfleet.remote import connect
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec import FleetSpec, SpecError, load_spec
 from armfleet.world import World
@@ -44,6 +45,7 @@ __all__ = [
     "TransformStamped",
     "World",
     "__version__",
+    "connect",
     "launch",
     "load_spec",
 ]

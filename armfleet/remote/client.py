@@ -8,13 +8,17 @@ from typing import Any
 
 import zmq
 
-from armfleet import __version__
 from armfleet.errors import ArmfleetError
 from armfleet.messages import JointCommand, Positions
 from armfleet.remote import runtime_file
 from armfleet.remote.address import normalize_address
 from armfleet.remote.errors import NoWorldFound, RequestTimeout
-from armfleet.remote.protocol import DEFAULT_QUEUE_SIZE, HARD_FRAME_LIMIT_BYTES, PROTOCOL_VERSION
+from armfleet.remote.protocol import (
+    DEFAULT_QUEUE_SIZE,
+    HARD_FRAME_LIMIT_BYTES,
+    PROTOCOL_VERSION,
+    armfleet_version,
+)
 from armfleet.remote.remote_arm import RemoteArm
 from armfleet.remote.remote_subscription import RemoteSubscription
 from armfleet.remote.request_channel import RequestChannel
@@ -56,7 +60,7 @@ class Client:
 
     def hello(self, timeout: float | None = None) -> dict[str, Any]:
         """Check that the world answers and speaks this client's protocol."""
-        args = {"protocol": PROTOCOL_VERSION, "client": __version__}
+        args = {"protocol": PROTOCOL_VERSION, "client": armfleet_version()}
         result: dict[str, Any] = self.call("hello", args, timeout)
         return result
 

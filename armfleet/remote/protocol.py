@@ -72,3 +72,10 @@ class FrameKind(enum.Enum):
     MESSAGES = "messages"
     TICK = "tick"
     CLOSING = "closing"
+
+
+def armfleet_version() -> str:
+    """The armfleet version of this side (read late: ``armfleet`` imports this package)."""
+    from armfleet import __version__
+
+    return __version__

@@ -19,7 +19,6 @@ from typing import Any
 
 import zmq
 
-from armfleet import __version__
 from armfleet.errors import ArmfleetError
 from armfleet.remote import runtime_file
 from armfleet.remote.address import DEFAULT_BIND, bind_endpoint, check_bind_host, is_loopback
@@ -34,6 +33,7 @@ from armfleet.remote.protocol import (
     PROTOCOL_VERSION,
     TICK_PERIOD_S,
     Service,
+    armfleet_version,
 )
 from armfleet.remote.run_state import RunState
 from armfleet.remote.services import FIELDS, WorldServices, require_known
@@ -262,11 +262,11 @@ class WorldServer:
         if protocol != PROTOCOL_VERSION:
             raise ProtocolError(
                 f"the client speaks protocol {protocol}, this world {PROTOCOL_VERSION}; use "
-                f"the same armfleet version on both sides (the world runs {__version__})"
+                f"the same armfleet version on both sides (the world runs {armfleet_version()})"
             )
         return {
             "protocol": PROTOCOL_VERSION,
-            "version": __version__,
+            "version": armfleet_version(),
             "pid": os.getpid(),
             "address": self.address,
         }

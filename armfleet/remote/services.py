@@ -13,7 +13,6 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from armfleet import __version__
 from armfleet.arm import Arm
 from armfleet.bus import Subscription
 from armfleet.errors import ArmFault, ArmfleetError, PoseError, ProtectiveStopError
@@ -22,7 +21,7 @@ from armfleet.messages import ArmMode, JointCommand
 from armfleet.remote.arguments import Arguments
 from armfleet.remote.codec import to_wire
 from armfleet.remote.errors import UnknownService, UnknownTopic
-from armfleet.remote.protocol import Service
+from armfleet.remote.protocol import Service, armfleet_version
 from armfleet.remote.run_state import RunState
 from armfleet.remote.subscription_queue import SubscriptionQueue
 from armfleet.spawn_pose import SpawnPose
@@ -105,7 +104,7 @@ class WorldServices:
                 "realtime_factor": None if run_state is None else run_state.realtime_factor,
                 "paused": run_state is not None and run_state.paused,
                 "arms": list(world.arms),
-                "version": __version__,
+                "version": armfleet_version(),
                 "address": self.address,
             }
 
