@@ -18,9 +18,11 @@ from armfleet.controllers import (
     JointStateBroadcaster,
     PositionController,
 )
+from armfleet.controllers.parameters import load_parameters
 from armfleet.controllers.position_controller import check_target
+from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ArmDescription
-from armfleet.errors import DescriptionError
+from armfleet.errors import DescriptionError, ParameterError
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray, Positions
 from armfleet.robot_state_publisher import RobotStatePublisher
@@ -28,6 +30,33 @@ from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 
 ControllerOverrides = Mapping[str, Mapping[str, Any]]
+
+
+def check_controller_parameters(
+    parameters: Mapping[str, Any], parameter_files: Mapping[str, Path]
+) -> None:
+    """Validate every controller's file and overrides before any part of the arm exists.
+
+    Raises:
+        ParameterError: unknown controller, overrides that are not a mapping, or
+            a file/override that does not fit the controller's schema.
+    """
+    unknown = (set(parameters) | set(parameter_files)) - set(CONTROLLER_TYPES)
+    if unknown:
+        raise ParameterError(
+            f"parameters for unknown controllers {', '.join(sorted(map(str, unknown)))}; "
+            f"valid: {', '.join(CONTROLLER_TYPES)}"
+        )
+    for controller, controller_type in CONTROLLER_TYPES.items():
+        overrides = parameters.get(controller, {})
+        if not isinstance(overrides, Mapping):
+            raise ParameterError(
+                f"parameters for {controller} must be a mapping of name: value, "
+                f"got {type(overrides).__name__}"
+            )
+        load_parameters(
+            controller, controller_type.parameter_schema, parameter_files.get(controller), overrides
+        )
 
 
 def start_positions(

@@ -132,7 +132,7 @@ class Bus:
 
 
 def _check_name(topic: str) -> None:
-    if not TOPIC_PATTERN.match(topic):
+    if not isinstance(topic, str) or not TOPIC_PATTERN.fullmatch(topic):
         raise TopicError(
             f"topic name {topic!r} is malformed; use /segment[/segment...] with lowercase "
             "letters, digits and '_' (e.g. /bob/joint_states)"

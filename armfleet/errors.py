@@ -26,7 +26,7 @@ class UnknownModel(ArmfleetError):
 
 
 class InvalidArmName(ArmfleetError):
-    def __init__(self, name: str, pattern: str) -> None:
+    def __init__(self, name: object, pattern: str) -> None:
         self.name = name
         super().__init__(
             f"arm name {name!r} is malformed; a name must match {pattern} "
@@ -61,6 +61,12 @@ class TargetLengthError(ArmfleetError):
             f"{arm}: got {got} target positions, expected {len(joint_names)} "
             f"(one per joint: {', '.join(joint_names)})"
         )
+
+
+class TargetTypeError(ArmfleetError):
+    def __init__(self, arm: str, joint_names: Sequence[str]) -> None:
+        self.arm = arm
+        super().__init__(f"{arm}: targets must be numbers, one per joint: {', '.join(joint_names)}")
 
 
 class NonFiniteTarget(ArmfleetError):

@@ -14,7 +14,7 @@ _ARM_NAME = re.compile(ARM_NAME_PATTERN)
 def check_arm_name(name: object, existing: Collection[str] = ()) -> str:
     """Return ``name`` if it is a well-formed name not in ``existing``; raise otherwise."""
     if not isinstance(name, str) or not _ARM_NAME.fullmatch(name) or name == "world":
-        raise InvalidArmName(repr(name) if not isinstance(name, str) else name, ARM_NAME_PATTERN)
+        raise InvalidArmName(name, ARM_NAME_PATTERN)
     if name in existing:
         raise DuplicateArmName(name, sorted(existing))
     return name

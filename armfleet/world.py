@@ -13,11 +13,15 @@ from typing import TYPE_CHECKING, TypeVar
 import pybullet as p
 
 from armfleet.arm import Arm
-from armfleet.arm_assembly import ControllerOverrides, assemble_arm, start_positions
+from armfleet.arm_assembly import (
+    ControllerOverrides,
+    assemble_arm,
+    check_controller_parameters,
+    start_positions,
+)
 from armfleet.bringup import BRINGUP_TOPIC, bring_up
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
-from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
@@ -181,12 +185,7 @@ class World:
         self._check_open()
         check_arm_name(name, self._arms)
         pose = SpawnPose.from_values(at)
-        unknown = (set(parameters or {}) | set(parameter_files or {})) - set(CONTROLLER_TYPES)
-        if unknown:
-            raise ArmfleetError(
-                f"parameters for unknown controllers {', '.join(sorted(unknown))}; "
-                f"valid: {', '.join(CONTROLLER_TYPES)}"
-            )
+        check_controller_parameters(parameters or {}, parameter_files or {})
         description = self._models.expand(model, f"{name}_", pose)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(name, kinematics, description.home, initial_positions)

@@ -30,6 +30,7 @@ from armfleet.errors import (
     ParameterError,
     PoseError,
     TargetLengthError,
+    TargetTypeError,
     UnknownModel,
 )
 from armfleet.messages import FloatArray, JointCommand
@@ -252,7 +253,7 @@ SPAWN_CASES = [
     pytest.param(
         BadInput(
             spawn_toby(initial_positions=["zero"] * 7),
-            ArmfleetError,
+            TargetTypeError,
             lambda w, b: ["numbers", "toby_panda_joint7"],
         ),
         id="initial-not-numbers",
@@ -264,11 +265,6 @@ SPAWN_CASES = [
             lambda w, b: ["gripper_controller", "joint_state_broadcaster, position_controller"],
         ),
         id="override-unknown-controller",
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="BUG: an unknown controller in parameters= raises the root ArmfleetError, "
-            "not ParameterError (world.py, World.spawn)",
-        ),
     ),
     pytest.param(
         BadInput(
@@ -330,12 +326,6 @@ SPAWN_CASES = [
             lambda w, b: ["position_controller"],
         ),
         id="override-not-a-mapping",
-        marks=pytest.mark.xfail(
-            strict=True,
-            raises=(ValueError, TypeError),
-            reason="BUG: a non-mapping override (a list, a number) escapes as ValueError/"
-            "TypeError from dict() in Controller.__init__ instead of a ParameterError",
-        ),
     ),
 ]
 
@@ -399,7 +389,7 @@ MOVE_CASES = [
     pytest.param(
         BadInput(
             move_bob(lambda b: [0.0, "x", 0.0, -1.0, 0.0, 1.0, 0.0]),
-            ArmfleetError,
+            TargetTypeError,
             lambda w, b: ["numbers", ", ".join(b.joint_names)],
         ),
         id="target-not-numbers",
@@ -407,7 +397,7 @@ MOVE_CASES = [
     pytest.param(
         BadInput(
             move_bob(lambda b: {"joint1": 0.0}),
-            ArmfleetError,
+            TargetTypeError,
             lambda w, b: ["numbers", ", ".join(b.joint_names)],
         ),
         id="target-a-dict",
@@ -499,11 +489,6 @@ def test_bad_command_on_the_topic_is_logged_and_ignored(
     assert np.abs(bob.positions - before.positions).max() < HOLD_DRIFT_RAD
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: a spawn refused for a bad position_controller override leaves "
-    "/toby/joint_states advertised on the bus (the broadcaster was configured first)",
-)
 def test_refused_spawn_leaves_no_topics_behind(scene: Scene) -> None:
     topics = scene.world.bus.topics
     with pytest.raises(ParameterError):

@@ -132,15 +132,6 @@ MALFORMED_TOPICS = {
         pytest.param(
             topic,
             id=key,
-            marks=[
-                pytest.mark.xfail(
-                    strict=True,
-                    reason="BUG: bus.TOPIC_PATTERN ends in '$' and is used with match(), "
-                    "so a trailing newline passes; use fullmatch()",
-                )
-            ]
-            if key == "trailing-newline"
-            else [],
         )
         for key, topic in MALFORMED_TOPICS.items()
     ],

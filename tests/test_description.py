@@ -350,15 +350,6 @@ MALFORMED = {
         pytest.param(
             key,
             id=key,
-            marks=[
-                pytest.mark.xfail(
-                    strict=True,
-                    reason="BUG: xacro's message for an undefined property holds a newline; "
-                    "DescriptionError passes it on, so the CLI prints two lines",
-                )
-            ]
-            if key == "undefined-property"
-            else [],
         )
         for key in MALFORMED
     ],

@@ -38,5 +38,6 @@ class OneLineParser(argparse.ArgumentParser):
 
 def fail(message: str) -> NoReturn:
     """Print ``armfleet: error: <message>`` on stderr and exit with code 2."""
-    print(f"armfleet: error: {message}", file=sys.stderr)
+    one_line = " ".join(message.split())
+    print(f"armfleet: error: {one_line}", file=sys.stderr)
     raise SystemExit(2)

@@ -27,6 +27,7 @@ from armfleet.errors import (
     NonFiniteTarget,
     ProtectiveStopError,
     TargetLengthError,
+    TargetTypeError,
 )
 from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
 
@@ -260,9 +261,7 @@ def check_target(
     try:
         values = np.asarray(target, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise ArmfleetError(
-            f"{arm}: targets must be numbers, one per joint: {', '.join(joint_names)}"
-        ) from None
+        raise TargetTypeError(arm, joint_names) from None
     if values.size != len(joint_names):
         raise TargetLengthError(arm, values.size, joint_names)
     for name, value, low, high in zip(joint_names, values, lower, upper, strict=True):

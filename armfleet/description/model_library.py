@@ -116,7 +116,8 @@ class ModelLibrary:
             try:
                 document = xacro.process_file(str(path), mappings=mappings)
             except Exception as exc:  # xacro raises bare Exceptions (XacroException, XML errors)
-                raise DescriptionError(f"{path}: xacro failed: {exc}") from exc
+                problem = " ".join(str(exc).split())  # xacro's messages span lines
+                raise DescriptionError(f"{path}: xacro failed: {problem}") from exc
             _make_massless_links_explicit(document)
             text = document.toprettyxml(indent="  ")
         ignored: tuple[tuple[str, str], ...] = ()
