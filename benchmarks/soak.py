@@ -59,8 +59,11 @@ def soak(spec: FleetSpec, duration_s: float, seed: int) -> dict[str, object]:
                 mode = arm.status(world.time).mode
                 if mode is ArmMode.ERROR or (mode is ArmMode.PROTECTIVE_STOP and not arm.is_moving):
                     arm.reset()
-                    arm.move_to(homes[name])
                     resets += 1
+                    try:
+                        arm.move_to(homes[name])
+                    except armfleet.ArmfleetError:
+                        refused += 1
                 elif mode is ArmMode.HOLDING:
                     lower, upper = arm.joint_limits
                     try:
@@ -70,10 +73,17 @@ def soak(spec: FleetSpec, duration_s: float, seed: int) -> dict[str, object]:
             world.run(COMMAND_PERIOD_S)
             if world.time <= warm_up_s:
                 warm_rss = rss_mb()
-        # The end: every arm goes home and must track it.
-        for name, arm in world.arms.items():
-            arm.reset()
-            arm.move_to(homes[name])
+        # The end: every arm, once at rest, goes home and must track it.
+        pending = set(world.arms)
+        deadline = world.time + 10.0
+        while pending and world.time < deadline:
+            for name in sorted(pending):
+                arm = world.arm(name)
+                if not arm.is_moving:
+                    arm.reset()
+                    arm.move_to(homes[name])
+                    pending.discard(name)
+            world.run(0.1)
         world.run(5.0)
         final_errors = {
             name: float(np.abs(arm.positions - homes[name]).max())

@@ -33,6 +33,9 @@ from armfleet.messages import ControllerState, FloatArray, JointCommand, Positio
 
 logger = logging.getLogger("armfleet")
 
+#: Ruckig's extrema may exceed a target at a limit by rounding; that is not an overshoot.
+LIMIT_TOLERANCE_RAD = 1e-9
+
 
 class PositionController(Controller):
     """Takes target joint positions on ``/<arm>/position_controller/commands``."""
@@ -195,7 +198,7 @@ class PositionController(Controller):
             self.upper,
             strict=True,
         ):
-            if low < lower or high > upper:
+            if low < lower - LIMIT_TOLERANCE_RAD or high > upper + LIMIT_TOLERANCE_RAD:
                 raise MotionLimitError(
                     self.arm.name, name, float(low if low < lower else high), lower, upper
                 )
