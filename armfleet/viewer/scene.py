@@ -1,4 +1,10 @@
-"""The viewer's stage: background, a ground grid under the arms and a camera framing them."""
+"""The viewer's stage: background, a ground grid under the arms and a camera framing them.
+
+MeshCat 0.3's orbit controls always turn around the page's origin and offer no
+command to move that centre, so the stage moves the world instead: everything
+armfleet draws lives under ``/meshcat``, whose transform puts the middle of
+the fleet at the page's origin. Poses under ``/meshcat`` stay world poses.
+"""
 
 from __future__ import annotations
 
@@ -20,6 +26,8 @@ GRID_COLOR = 0x30343A
 CAMERA_FOV_DEG = 75.0
 #: Direction from the scene centre to the camera (world frame, z up).
 CAMERA_DIRECTION = np.array([0.35, -1.0, 0.55])
+#: Length of the world axes drawn at the origin [m].
+ORIGIN_AXES_M = 0.3
 #: Room kept around the arms' frame origins for their meshes [m].
 MESH_MARGIN_M = 0.15
 #: Extent framed when there is no arm yet [m].
@@ -43,7 +51,7 @@ def camera_placement(box: Box) -> tuple[Vector, Vector]:
     lower, upper = box
     target = 0.5 * (lower + upper)
     radius = 0.5 * float(np.linalg.norm(upper - lower))
-    distance = radius / math.sin(math.radians(CAMERA_FOV_DEG) / 2)
+    distance = radius / math.tan(math.radians(CAMERA_FOV_DEG) / 2)
     direction = CAMERA_DIRECTION / np.linalg.norm(CAMERA_DIRECTION)
     return target, target + distance * direction
 
@@ -75,27 +83,32 @@ class Stage:
         background.set_property("bottom_color", list(BACKGROUND_BOTTOM))
         # MeshCat's 20 m grid loses its near lines in software WebGL; ours fits the arms.
         visualizer["/Grid"].set_property("visible", False)
+        # MeshCat's axes mark the page's origin, which is the fleet's middle (see above).
+        visualizer["/Axes"].set_property("visible", False)
+        import meshcat.geometry as mg
+
+        visualizer["origin"].set_object(mg.triad(ORIGIN_AXES_M))
 
     def frame(self, bounds: Sequence[Box]) -> None:
         """Lay the grid under every arm and point the camera at them all.
 
-        The orbit target is the origin of ``/Cameras/default``; the camera
-        sits in its child ``rotated``, a frame turned +90 deg about x
-        (three.js is y-up).
+        The middle of the fleet goes to the page's origin, around which the
+        camera orbits; the camera sits in ``/Cameras/default/rotated``, a
+        frame turned +90 deg about x (three.js is y-up).
         """
         import meshcat.geometry as mg
 
         box = scene_box(bounds)
         grid = grid_lines(box)
         if self._grid is None or not np.array_equal(grid, self._grid):
-            self._visualizer["/Ground"].set_object(
+            self._visualizer["ground"].set_object(
                 mg.LineSegments(mg.PointsGeometry(grid), mg.LineBasicMaterial(color=GRID_COLOR))
             )
             self._grid = grid
         target, position = camera_placement(box)
-        pose = np.eye(4)
-        pose[:3, 3] = target
-        self._visualizer["/Cameras/default"].set_transform(pose)
+        shift = np.eye(4)
+        shift[:3, 3] = -target
+        self._visualizer.set_transform(shift)  # /meshcat
         dx, dy, dz = (position - target).tolist()
         self._visualizer["/Cameras/default/rotated/<object>"].set_property(
             "position", [dx, dz, -dy]

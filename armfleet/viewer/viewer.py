@@ -17,6 +17,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -87,8 +88,11 @@ class Viewer:
         show_targets: bool = True,
         display_rate_hz: float = DISPLAY_RATE_HZ,
     ) -> None:
-        import meshcat
         import zmq
+
+        with warnings.catch_warnings():  # meshcat 0.3 imports a deprecated pyzmq module
+            warnings.simplefilter("ignore", DeprecationWarning)
+            import meshcat
 
         from armfleet.viewer.publisher import UpdatePublisher
         from armfleet.viewer.recorder import Recorder
@@ -137,6 +141,16 @@ class Viewer:
     def port(self) -> int:
         """Web port on 127.0.0.1."""
         return self._server.web_port
+
+    @property
+    def zmq_port(self) -> int:
+        """Command port of the server on 127.0.0.1."""
+        return self._server.zmq_port
+
+    @property
+    def batches_sent(self) -> int:
+        """Live updates the server has received so far (one request each)."""
+        return 0 if self._publisher is None else self._publisher.batches_sent
 
     @property
     def server_pid(self) -> int:

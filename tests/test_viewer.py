@@ -1,0 +1,370 @@
+"""The MeshCat viewer without a browser: scene, live updates, replay, server process, failures.
+
+A websocket client (:class:`SceneWatcher`) stands in for the browser: it gets
+the very messages a page gets. The page itself is tested in
+``test_viewer_browser.py``.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import umsgpack  # type: ignore[import-untyped]
+
+import armfleet
+from armfleet.viewer import DISPLAY_RATE_HZ, Viewer, ViewerError
+from armfleet.viewer.replay import quaternions_xyzw
+from tests.viewer_helpers import (
+    SceneWatcher,
+    expected_visual_poses,
+    non_loopback_ipv4,
+    process_alive,
+    stalled_browser,
+    tool0_pose,
+    wait_until_gone,
+)
+
+#: An arm is redrawn once it moved 1e-5 rad (armfleet.viewer.arm_visual.REDRAW_TOLERANCE):
+#: with ~1 m of arm, what a page shows is within 1e-4 m of the simulation.
+POSE_TOLERANCE = 1e-4
+
+
+@pytest.fixture(scope="module")
+def viewed() -> Iterator[armfleet.World]:
+    """A world with a viewer, bob at (0, 0) and toby at (1, 0)."""
+    world = armfleet.World(viewer=True)
+    try:
+        assert world.viewer is not None, world.viewer_error
+        world.spawn("bob", at=(0, 0))
+        world.spawn("toby", at=(1, 0))
+        yield world
+    finally:
+        world.close()
+
+
+def viewer_of(world: armfleet.World) -> Viewer:
+    assert world.viewer is not None, world.viewer_error
+    return world.viewer
+
+
+def nudge(arm: armfleet.Arm, delta: float) -> np.ndarray:
+    """A target ``delta`` rad from where the arm is, kept 0.1 rad inside the limits."""
+    lower, upper = arm.joint_limits
+    target: np.ndarray = np.clip(arm.positions + delta, lower + 0.1, upper - 0.1)
+    return target
+
+
+def settle(world: armfleet.World, arm: armfleet.Arm, limit_s: float = 10.0) -> None:
+    while arm.is_moving and limit_s > 0:
+        world.run(0.1)
+        limit_s -= 0.1
+    world.run(0.1)
+
+
+def max_pose_error(seen: dict[str, np.ndarray], expected: dict[str, np.ndarray]) -> float:
+    """Largest difference of a pose entry; infinite if a node was not seen yet."""
+    return max(
+        float(np.abs(seen[path] - pose).max()) if path in seen else np.inf
+        for path, pose in expected.items()
+    )
+
+
+# -- import ----------------------------------------------------------------------------
+def test_importing_armfleet_loads_no_viewer_dependency() -> None:
+    code = (
+        "import sys, armfleet, armfleet.viewer; "
+        "print([m for m in ('meshcat', 'tornado', 'umsgpack', 'pinocchio.visualize') "
+        "if m in sys.modules])"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "[]"
+
+
+# -- scene -----------------------------------------------------------------------------
+def test_each_arm_loads_once_under_its_own_node(viewed: armfleet.World) -> None:
+    with SceneWatcher(viewer_of(viewed).port) as watcher:
+        scene = watcher.wait_quiet()
+    for name in ("bob", "toby"):
+        arm = viewed.arm(name)
+        expected = expected_visual_poses(arm)
+        visuals = scene.nodes_under(f"/meshcat/armfleet/{name}/visuals")
+        assert visuals == sorted(expected), f"{name}: one node per visual geometry"
+        assert len(visuals) == 11  # Panda: link0-7, hand, two fingers
+        loads = [path for kind, path in scene.log if kind == "set_object" and path in visuals]
+        assert sorted(loads) == visuals, f"{name}: each mesh is sent once"
+        assert max_pose_error(scene.transforms, expected) < POSE_TOLERANCE
+    # The mesh files travel once per page: toby's objects refer to bob's.
+    bob_link0 = scene.objects["/meshcat/armfleet/bob/visuals/bob_panda_link0_0"]["object"]
+    toby_link0 = scene.objects["/meshcat/armfleet/toby/visuals/toby_panda_link0_0"]["object"]
+    assert len(bob_link0["object"]["data"]) > 100_000
+    assert toby_link0["object"]["data"] == ""
+    assert toby_link0["object"]["armfleet_mesh"] == bob_link0["object"]["armfleet_mesh"]
+
+
+def test_stage_has_a_grid_under_the_arms_and_a_camera_on_them(viewed: armfleet.World) -> None:
+    with SceneWatcher(viewer_of(viewed).port) as watcher:
+        scene = watcher.wait_quiet()
+    grid = scene.objects["/meshcat/ground"]["object"]
+    assert grid["object"]["type"] == "LineSegments"
+    # The camera orbits the page's origin: the world is shifted to put the fleet there.
+    target = -scene.transforms["/meshcat"][:3, 3]
+    assert 0.0 < target[0] < 1.0 and abs(target[1]) < 0.3, "the camera aims between bob and toby"
+    assert "/meshcat/origin" in scene.objects
+    assert scene.properties[("/Grid", "visible")] is False  # MeshCat's own grid, replaced
+    background = scene.properties[("/Background", "top_color")]
+    assert min(background) < 0.9, "the background is not white"
+
+
+# -- live updates ----------------------------------------------------------------------
+def test_commanding_toby_moves_toby_not_bob(viewed: armfleet.World) -> None:
+    bob, toby = viewed.arm("bob"), viewed.arm("toby")
+    bob_before = expected_visual_poses(bob)
+    with SceneWatcher(viewer_of(viewed).port) as watcher:
+        watcher.wait_quiet()
+        log_start = len(watcher.state.log)
+        toby.move_to(nudge(toby, 0.4))
+        settle(viewed, toby)
+        toby_after = expected_visual_poses(toby)
+        watcher.wait_for(lambda s: max_pose_error(s.transforms, toby_after) < POSE_TOLERANCE)
+        scene = watcher.wait_quiet()
+        moved = [path for kind, path in scene.log[log_start:] if kind == "set_transform"]
+    assert any(path.startswith("/meshcat/armfleet/toby/visuals/") for path in moved)
+    assert not any(path.startswith("/meshcat/armfleet/bob/") for path in moved)
+    assert max_pose_error(scene.transforms, bob_before) < POSE_TOLERANCE
+
+
+def test_target_marker_shows_where_toby_is_going(viewed: armfleet.World) -> None:
+    toby = viewed.arm("toby")
+    marker = "/meshcat/armfleet/toby/targets/tool0"
+    target = nudge(toby, -0.3)
+    with SceneWatcher(viewer_of(viewed).port) as watcher:
+        toby.move_to(target)
+        viewed.run(0.2)
+        assert toby.is_moving
+        goal = tool0_pose(toby, target)
+        watcher.wait_for(
+            lambda s: (
+                s.properties.get((marker, "visible")) is True
+                and marker in s.transforms
+                and float(np.abs(s.transforms[marker] - goal).max()) < POSE_TOLERANCE
+            )
+        )
+        settle(viewed, toby)
+        watcher.wait_for(lambda s: s.properties.get((marker, "visible")) is False)
+    assert np.abs(tool0_pose(toby)[:3, 3] - goal[:3, 3]).max() < 2e-3, "toby got there"
+
+
+def test_landmark_frames_can_be_shown(viewed: armfleet.World) -> None:
+    viewer = viewer_of(viewed)
+    bob = viewed.arm("bob")
+    with SceneWatcher(viewer.port) as watcher:
+        scene = watcher.wait_quiet()
+        assert scene.properties[("/meshcat/armfleet/bob/landmarks", "visible")] is False
+        viewer.show_frames(True)
+        watcher.wait_for(
+            lambda s: s.properties[("/meshcat/armfleet/bob/landmarks", "visible")] is True
+        )
+        viewer.show_frames(False)
+        scene = watcher.wait_quiet()
+    tool0 = scene.transforms["/meshcat/armfleet/bob/landmarks/tool0"]
+    assert np.abs(tool0 - tool0_pose(bob)).max() < POSE_TOLERANCE
+    base = scene.transforms["/meshcat/armfleet/bob/landmarks/base_link"]
+    assert np.abs(base[:3, 3]).max() < 1e-9  # bob's base_link is at the world origin
+    assert scene.properties[("/meshcat/armfleet/bob/landmarks", "visible")] is False
+
+
+def test_display_updates_follow_wall_time_not_physics(viewed: armfleet.World) -> None:
+    viewer = viewer_of(viewed)
+    toby = viewed.arm("toby")
+    toby.move_to(nudge(toby, 0.3))
+    assert viewer.refresh()
+    sent_before = viewer.batches_sent
+    started = time.perf_counter()
+    viewed.run(1.0)  # 1000 physics steps
+    wall_s = time.perf_counter() - started
+    assert viewer.refresh()
+    sent = viewer.batches_sent - sent_before
+    # One batch per display period at most, plus the final refresh and the idle one.
+    assert 1 <= sent <= wall_s * DISPLAY_RATE_HZ + 3
+    settle(viewed, toby)
+
+
+def test_a_hung_browser_does_not_hold_up_the_others(viewed: armfleet.World) -> None:
+    viewer = viewer_of(viewed)
+    toby = viewed.arm("toby")
+    hung = stalled_browser(viewer.port)
+    try:
+        with SceneWatcher(viewer.port) as watcher:
+            for delta in (0.3, -0.3, 0.2):
+                toby.move_to(nudge(toby, delta))
+                settle(viewed, toby)
+            assert viewer.refresh(), "the server still answers"
+            final = expected_visual_poses(toby)
+            watcher.wait_for(lambda s: max_pose_error(s.transforms, final) < POSE_TOLERANCE)
+    finally:
+        hung.close()
+
+
+# -- replay ----------------------------------------------------------------------------
+def replay_commands(path: Path) -> list[dict[str, Any]]:
+    """The MeshCat commands a replay file runs, decoded."""
+    html = path.read_text(encoding="utf-8")
+    match = re.search(r'<script [^>]*id="armfleet-commands">(.*?)</script>', html)
+    assert match is not None
+    return [umsgpack.unpackb(base64.b64decode(c)) for c in json.loads(match.group(1))]
+
+
+def test_replay_has_one_track_set_per_arm(viewed: armfleet.World, tmp_path: Path) -> None:
+    toby = viewed.arm("toby")
+    toby.move_to(nudge(toby, -0.25))
+    settle(viewed, toby)
+    path = viewer_of(viewed).save(tmp_path / "run.html")
+    html = path.read_text(encoding="utf-8")
+    assert "<script src" not in html and "http://" not in html.split("<script>", 1)[0]
+    commands = replay_commands(path)
+    (animation,) = [c for c in commands if c["type"] == "set_animation"]
+    assert commands[-1] is animation
+    by_arm: dict[str, dict[str, Any]] = {}
+    for entry in animation["animations"]:
+        arm = entry["path"].split("/")[3]
+        by_arm.setdefault(arm, {})[entry["path"]] = entry["clip"]
+    assert set(by_arm) == {"bob", "toby"}
+    for name, clips in by_arm.items():
+        # Arms appear when they are ready: bring-up takes simulated time.
+        appear = clips.pop(f"/meshcat/armfleet/{name}")
+        (visible,) = appear["tracks"]
+        assert [k["value"] for k in visible["keys"]] == [False, True]
+        visuals = set(expected_visual_poses(viewed.arm(name)))
+        assert set(clips) == visuals | {f"/meshcat/armfleet/{name}/landmarks/tool0"}
+        for clip in clips.values():
+            tracks = {t["name"]: t for t in clip["tracks"]}
+            assert set(tracks) == {".position", ".quaternion"}
+    # The last key of toby's flange is where toby is now.
+    flange = by_arm["toby"]["/meshcat/armfleet/toby/visuals/toby_panda_link7_0"]
+    tracks = {t["name"]: t for t in flange["tracks"]}
+    expected = expected_visual_poses(toby)["/meshcat/armfleet/toby/visuals/toby_panda_link7_0"]
+    last_position = tracks[".position"]["keys"][-1]["value"]
+    last_quaternion = tracks[".quaternion"]["keys"][-1]["value"]
+    assert np.abs(np.array(last_position) - expected[:3, 3]).max() < 1e-6
+    rotation = pin.Quaternion(np.array(last_quaternion)).toRotationMatrix()  # x, y, z, w
+    assert np.abs(rotation - expected[:3, :3]).max() < 1e-6
+    assert len(tracks[".position"]["keys"]) > 2, "toby's motion is in the replay"
+
+
+def test_quaternions_match_pinocchio() -> None:
+    pin.seed(7)
+    rotations = np.array([pin.SE3.Random().rotation for _ in range(200)])
+    # Half turns about each axis: the cases where w vanishes.
+    rotations[:4] = [
+        np.eye(3),
+        np.diag([1.0, -1, -1]),
+        np.diag([-1.0, 1, -1]),
+        np.diag([-1.0, -1, 1]),
+    ]
+    rotations[4:8] = rotations[4:8] @ rotations[:4]
+    ours = quaternions_xyzw(rotations)
+    for rotation, quaternion in zip(rotations, ours, strict=True):
+        assert abs(np.linalg.norm(quaternion) - 1.0) < 1e-12
+        back = pin.Quaternion(quaternion).toRotationMatrix()
+        assert np.abs(back - rotation).max() < 1e-9
+
+
+# -- server process --------------------------------------------------------------------
+def test_server_listens_on_loopback_only(viewed: armfleet.World) -> None:
+    viewer = viewer_of(viewed)
+    ports = {"web": viewer.port, "zmq": viewer.zmq_port}
+    for port in ports.values():  # reachable on loopback
+        socket.create_connection(("127.0.0.1", port), timeout=2.0).close()
+    address = non_loopback_ipv4()
+    if address is None:
+        pytest.skip("this machine has no non-loopback IPv4 address to try")
+    for kind, port in ports.items():
+        with pytest.raises(OSError):
+            socket.create_connection((address, port), timeout=2.0).close()
+            pytest.fail(f"the {kind} port {port} answers on {address}")
+
+
+def test_no_server_process_is_left_after_the_world_closes() -> None:
+    world = armfleet.World(viewer=True)
+    viewer = viewer_of(world)
+    pid = viewer.server_pid
+    assert process_alive(pid)
+    world.close()
+    assert not process_alive(pid)
+    viewer.close()  # idempotent
+    assert viewer.closed
+
+
+def test_server_exits_when_the_python_process_is_killed(tmp_path: Path) -> None:
+    script = textwrap.dedent(
+        """
+        import os, signal, sys
+        import armfleet
+        world = armfleet.World(viewer=True)
+        print(world.viewer.server_pid, flush=True)
+        sys.stdin.readline()
+        os.kill(os.getpid(), signal.SIGKILL)  # no atexit, no close
+        """
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None and child.stdin is not None
+    server_pid = int(child.stdout.readline())
+    assert process_alive(server_pid)
+    child.stdin.write("\n")
+    child.stdin.flush()
+    assert child.wait(10) == -signal.SIGKILL
+    assert wait_until_gone(server_pid, 5.0), "the server outlived its parent"
+
+
+def test_taken_port_leaves_the_world_running_without_viewer() -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        with armfleet.World(viewer=True, viewer_port=port) as world:
+            assert world.viewer is None
+            assert world.viewer_error is not None
+            assert str(port) in world.viewer_error and "in use" in world.viewer_error
+            bob = world.spawn("bob")
+            target = nudge(bob, 0.2)
+            bob.move_to(target)
+            settle(world, bob)
+            assert np.abs(bob.positions - target).max() < 1e-2
+
+
+def test_a_dead_server_stops_the_viewer_not_the_simulation(tmp_path: Path) -> None:
+    with armfleet.World(viewer=True) as world:
+        viewer = viewer_of(world)
+        bob = world.spawn("bob")
+        os.kill(viewer.server_pid, signal.SIGKILL)
+        bob.move_to(nudge(bob, 0.3))
+        started = time.perf_counter()
+        world.run(1.0)
+        assert time.perf_counter() - started < 5.0, "stepping never waits for the viewer"
+        deadline = time.monotonic() + 15.0
+        while viewer.error is None and time.monotonic() < deadline:
+            world.run(0.05)
+        assert viewer.error is not None
+        world.spawn("toby", at=(1, 0))  # add_arm on a stopped viewer: nothing happens
+        assert viewer.arms == ("bob",)
+        with pytest.raises(ViewerError, match="not running"):
+            viewer.save(tmp_path / "run.html")
+        assert isinstance(ViewerError("x"), armfleet.ArmfleetError)
