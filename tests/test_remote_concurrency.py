@@ -3,6 +3,7 @@ every command is applied, and the world keeps stepping all along."""
 
 from __future__ import annotations
 
+import itertools
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -89,7 +90,7 @@ def test_eight_clients_spawn_and_command_arms_at_once(world: WorldProcess) -> No
         assert sorted({arm for arm, _ in order}) == sorted(names)
         # The world never stopped stepping: every sample is later than the one before.
         assert len(times) > 10
-        assert all(later > earlier for earlier, later in zip(times, times[1:], strict=False))
+        assert all(later > earlier for earlier, later in itertools.pairwise(times))
     finally:
         monitor.close()
 

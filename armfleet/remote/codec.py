@@ -39,7 +39,10 @@ def unpack(data: bytes, limit: int = HARD_FRAME_LIMIT_BYTES) -> Any:
     try:
         return msgpack.unpackb(data, raw=False, strict_map_key=True)
     except Exception as exc:  # msgpack raises several kinds (ExtraData, FormatError, ...)
-        raise ProtocolError(f"not a valid msgpack message ({type(exc).__name__}: {exc})") from None
+        detail = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+        if isinstance(exc, msgpack.StackError):
+            detail = "nested too deeply"
+        raise ProtocolError(f"not a valid msgpack message ({detail})") from None
 
 
 def unpack_request(data: bytes) -> Any:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import difflib
+
+from armfleet.bus import TOPIC_PATTERN
 from armfleet.errors import ArmfleetError
 
 
@@ -16,10 +19,26 @@ class UnknownService(ProtocolError):
 
 
 class UnknownTopic(ArmfleetError):
+    """A topic the world does not have; the message lists them (or, when there are
+    many, the ones closest to what was asked)."""
+
+    #: Longest list of topics a message spells out.
+    MAX_LISTED = 12
+
     def __init__(self, topic: str, available: list[str]) -> None:
         self.topic = topic
-        listed = ", ".join(sorted(available)) or "(none)"
-        super().__init__(f"unknown topic {topic!r}; topics: {listed}")
+        self.available = tuple(sorted(available))
+        if not TOPIC_PATTERN.match(topic):
+            problem = f"topic name {topic!r} is malformed (e.g. /bob/joint_states)"
+        else:
+            problem = f"unknown topic {topic!r}"
+        if len(self.available) <= self.MAX_LISTED:
+            choices = f"topics: {', '.join(self.available) or '(none)'}"
+        else:
+            close = difflib.get_close_matches(topic, self.available, n=3, cutoff=0.6)
+            hint = f"did you mean {' or '.join(close)}? " if close else ""
+            choices = f"{hint}{len(self.available)} topics: see 'armfleet topic list'"
+        super().__init__(f"{problem}; {choices}")
 
 
 class RemoteError(ArmfleetError):
