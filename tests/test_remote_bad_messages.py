@@ -267,7 +267,7 @@ class Target:
 @pytest.fixture(scope="module")
 def target(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Target]:
     runtime = tmp_path_factory.mktemp("runtime")
-    world = WorldProcess(runtime, "bob", "--at", "0,0", "--no-viewer", "--realtime", "--quiet")
+    world = WorldProcess(runtime, "bob", "--at", "0,0", "--no-viewer", "--realtime")
     context = zmq.Context()
     raw = context.socket(zmq.DEALER)
     raw.setsockopt(zmq.LINGER, 0)

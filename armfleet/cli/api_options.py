@@ -37,7 +37,8 @@ def check_api_arguments(args: argparse.Namespace) -> None:
 
 
 def start_api(world: World, run_state: RunState, args: argparse.Namespace) -> WorldServer | None:
-    """Serve ``world`` as the options say; print its address (and a warning if exposed)."""
+    """Serve ``world`` as the options say; print its address (unless ``--quiet``: clients
+    find it anyway) and, on stderr, a warning if other machines can reach it."""
     if getattr(args, "no_api", False):
         return None
     server = WorldServer(
@@ -46,7 +47,8 @@ def start_api(world: World, run_state: RunState, args: argparse.Namespace) -> Wo
         host=getattr(args, "api_bind", DEFAULT_BIND),
         port=getattr(args, "api_port", 0),
     )
-    print(f"api: {server.address}", flush=True)
+    if not getattr(args, "quiet", False):
+        print(f"api: {server.address}", flush=True)
     if server.exposed:
         print(
             f"armfleet: warning: the live API listens on {server.address}: anyone who can reach "

@@ -14,8 +14,6 @@ from armfleet.remote import RunState
 from armfleet.world import World
 
 STATUS_PERIOD_S = 1.0
-#: Shortest wait worth sleeping for when ahead of the wall clock [s].
-MIN_SLEEP_S = 0.001
 #: Falling further behind the wall clock than this (a long bring-up) is not caught up [s].
 MAX_LAG_S = 0.25
 #: Period of progress reports to the run state (for its real-time factor) [s].
@@ -65,7 +63,7 @@ def run_world(
             ahead = (world.time - anchor_sim) - (now - anchor_wall)
             if ahead < -MAX_LAG_S:
                 anchor_sim, anchor_wall = world.time, now  # do not sprint to catch up
-            while ahead > MIN_SLEEP_S and not run_state.paused:
+            while ahead > 0 and not run_state.paused:
                 run_state.sleep(ahead)
                 world.process_requests()
                 now = time.monotonic()
