@@ -144,6 +144,11 @@ class PendingRequests:
                 continue
             self._outbox.reply(pending.peer, pending.request_id, result)
 
+    def next_deadline(self) -> float | None:
+        """The earliest deadline of work not yet answered (monotonic) [s], or None."""
+        deadlines = [p.deadline for p in self._pending.values() if p.deadline is not None]
+        return min(deadlines, default=None)
+
     def expire(self) -> None:
         """Cancel, with an error reply, work still queued past its deadline."""
         now = time.monotonic()

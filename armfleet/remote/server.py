@@ -171,7 +171,8 @@ class WorldServer:
         next_tick = time.monotonic() + TICK_PERIOD_S
         try:
             while not self._stopping.is_set():
-                timeout = next_tick - time.monotonic()
+                wake_at = min(next_tick, self._pending.next_deadline() or next_tick)
+                timeout = wake_at - time.monotonic()
                 if self._streams.has_backlog:
                     timeout = min(timeout, 0.005)  # retry slow clients soon
                 poller.poll(max(0, round(timeout * 1000)))
