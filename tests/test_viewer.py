@@ -25,9 +25,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import umsgpack  # type: ignore[import-untyped]
+import zmq
 
 import armfleet
 from armfleet.viewer import DISPLAY_RATE_HZ, Viewer, ViewerError
+from armfleet.viewer.connection import BridgeConnection
 from armfleet.viewer.replay import quaternions_xyzw
 from tests.viewer_helpers import (
     SceneWatcher,
@@ -221,6 +223,23 @@ def test_a_hung_browser_does_not_hold_up_the_others(viewed: armfleet.World) -> N
         hung.close()
 
 
+def test_an_arm_appears_when_ready_and_goes_when_removed(viewed: armfleet.World) -> None:
+    viewer = viewer_of(viewed)
+    tim_node = "/meshcat/armfleet/tim"
+    with SceneWatcher(viewer.port) as watcher:
+        watcher.wait_quiet()
+        tim = viewed.spawn("tim", at=(0, 1.2))
+        expected = expected_visual_poses(tim)
+        watcher.wait_for(lambda s: max_pose_error(s.transforms, expected) < POSE_TOLERANCE)
+        assert len(watcher.state.nodes_under(f"{tim_node}/visuals")) == 11
+        watcher.wait_for(lambda s: -s.transforms["/meshcat"][1, 3] > 0.3)  # reframed
+        viewed.remove("tim")
+        watcher.wait_for(lambda s: not s.nodes_under(tim_node))
+        assert ("delete", tim_node) in watcher.state.log
+        watcher.wait_for(lambda s: abs(s.transforms["/meshcat"][1, 3]) < 0.3)
+    assert viewer.arms == ("bob", "toby")
+
+
 # -- replay ----------------------------------------------------------------------------
 def replay_commands(path: Path) -> list[dict[str, Any]]:
     """The MeshCat commands a replay file runs, decoded."""
@@ -298,6 +317,22 @@ def test_server_listens_on_loopback_only(viewed: armfleet.World) -> None:
         with pytest.raises(OSError):
             socket.create_connection((address, port), timeout=2.0).close()
             pytest.fail(f"the {kind} port {port} answers on {address}")
+
+
+def test_server_answers_a_malformed_request_and_goes_on(viewed: armfleet.World) -> None:
+    viewer = viewer_of(viewed)
+    context = zmq.Context()
+    connection = BridgeConnection(context, f"tcp://127.0.0.1:{viewer.zmq_port}", viewer.url)
+    try:
+        with pytest.raises(ViewerError, match="error"):
+            connection.request([b"set_property", b"/meshcat/x", b"\xc1 not msgpack"])
+        with pytest.raises(ViewerError, match="unknown request"):
+            connection.request([b"launch_missiles"])
+        assert connection.request([b"ping"]) == [b"ok"]
+    finally:
+        connection.close()
+        context.destroy(linger=0)
+    assert viewer.refresh()
 
 
 def test_no_server_process_is_left_after_the_world_closes() -> None:

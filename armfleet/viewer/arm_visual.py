@@ -62,6 +62,8 @@ class ArmVisual:
 
         loader = MeshcatVisualizer(model, None, self.geometry)
         loader.initViewer(viewer=visualizer)
+        # Loading also places the meshes: at the arm's pose, not the model's zero.
+        pin.forwardKinematics(model, loader.data, arm.body.position)
         loader.loadViewerModel(rootNodeName=f"armfleet/{arm.name}")
         #: MeshCat paths of the visual geometries, in visual-model order.
         self.geometry_paths = tuple(
@@ -71,7 +73,9 @@ class ArmVisual:
         self.tool0_path = f"{self.node}/landmarks/tool0"
         self._packer = TransformPacker((*self.geometry_paths, self.tool0_path))
         scale = [np.append(g.meshScale, 1.0) for g in self.geometry.geometryObjects]
-        self._scale = np.array([*scale, np.ones(4)])[:, None, :]
+        scales = np.array([*scale, np.ones(4)])[:, None, :]
+        #: Column scaling of each pose (MeshCat scales meshes through their matrix).
+        self._scale: Poses | None = None if np.all(scales == 1.0) else scales
 
         root = visualizer[f"armfleet/{arm.name}"]
         landmarks = root["landmarks"]
@@ -105,7 +109,9 @@ class ArmVisual:
         pin.updateFramePlacement(self.model, self._data, self._tool0)
         homogeneous = [placement.homogeneous for placement in self._geometry_data.oMg]
         homogeneous.append(self._data.oMf[self._tool0].homogeneous)
-        poses: Poses = np.array(homogeneous) * self._scale
+        poses: Poses = np.array(homogeneous)
+        if self._scale is not None:
+            poses *= self._scale
         return poses
 
     def collect(self, into: Updates) -> None:

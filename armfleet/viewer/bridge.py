@@ -280,23 +280,28 @@ class Bridge:
 
     # -- ZMQ requests ------------------------------------------------------------------
     def _on_request(self, frames: list[bytes]) -> None:
+        try:
+            reply = self._answer(frames)
+        except Exception as exc:  # a malformed command must not leave the client waiting
+            reply = [f"error: {type(exc).__name__}: {exc}".encode()[:200]]
+        self._socket.send_multipart(reply)
+
+    def _answer(self, frames: list[bytes]) -> list[bytes]:
         kind = frames[0]
         if kind == b"batch":
             self._on_batch(frames[1:])
-            self._socket.send(b"ok")
-        elif kind == b"scene":
+            return [b"ok"]
+        if kind == b"scene":
             commands = self.tree.commands()
-            full = [c.full if isinstance(c, SharedMesh) else c for c in commands]
-            self._socket.send_multipart([b"scene", *full])
-        elif kind == b"ping":
-            self._socket.send(b"ok")
-        elif kind in COMMANDS and len(frames) == 3:
+            return [b"scene", *(c.full if isinstance(c, SharedMesh) else c for c in commands)]
+        if kind == b"ping":
+            return [b"ok"]
+        if kind in COMMANDS and len(frames) == 3:
             message = self._apply(kind, split_path(frames[1]), frames[2])
             for browser in list(self.browsers):
                 browser.write_all([message])
-            self._socket.send(b"ok")
-        else:
-            self._socket.send(b"error: unknown request " + kind[:40])
+            return [b"ok"]
+        return [b"error: unknown request " + kind[:40]]
 
     def _on_batch(self, frames: list[bytes]) -> None:
         if len(frames) % 3:

@@ -52,14 +52,13 @@ class TransformPacker:
             if tail != (bytes([_FLOAT64]) + bytes(8)) * 16:
                 raise RuntimeError("unexpected msgpack layout of a set_transform command")
             self._heads.append(head)
+        self._entries = np.empty((len(self.paths), 16), dtype=_MATRIX_ENTRY)
+        self._entries["marker"] = _FLOAT64
 
     def pack(self, poses: npt.NDArray[np.float64], into: Updates) -> None:
         """Add the commands placing each node at ``poses[i]`` (n x 4 x 4, world) to ``into``."""
-        count = len(self.paths)
-        entries = np.empty((count, 16), dtype=_MATRIX_ENTRY)
-        entries["marker"] = _FLOAT64
         # MeshCat (three.js) reads matrices column by column.
-        entries["value"] = poses.transpose(0, 2, 1).reshape(count, 16)
-        body = entries.tobytes()
+        self._entries["value"] = poses.transpose(0, 2, 1).reshape(len(self.paths), 16)
+        body = self._entries.tobytes()
         for i, (key, head) in enumerate(zip(self._keys, self._heads, strict=True)):
             into[key] = head + body[i * _MATRIX_BYTES : (i + 1) * _MATRIX_BYTES]

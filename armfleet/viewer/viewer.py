@@ -192,6 +192,10 @@ class Viewer:
                 self._visuals[arm.name] = visual
                 self._recorder.add(arm.name)
                 self._frame_camera()
+                first: Updates = {}
+                visual.collect(first)
+            if self._publisher is not None:
+                self._publisher.offer(first)
         except ViewerError as exc:
             self._fail(str(exc))
         except (RuntimeError, ValueError, OSError) as exc:  # Pinocchio/MeshCat loading
