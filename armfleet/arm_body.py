@@ -89,9 +89,8 @@ class ArmBody:
     def read(self) -> None:
         """Fill :attr:`position` and :attr:`velocity` from the physics engine."""
         states = p.getJointStates(self.body_id, self.joint_indices, physicsClientId=self._client)
-        for i, state in enumerate(states):
-            self.position[i] = state[0]
-            self.velocity[i] = state[1]
+        self.position[:] = [state[0] for state in states]
+        self.velocity[:] = [state[1] for state in states]
 
     def write(self) -> None:
         """Apply :attr:`effort_command` as joint torques (no-op while braked)."""

@@ -67,6 +67,7 @@ class ArmKinematics:
         self.velocity_limit = np.array(self.model.velocityLimit, dtype=float)
         self.effort_limit = np.array(self.model.effortLimit, dtype=float)
         self.damping = np.array(self.model.damping, dtype=float)
+        self._damping_torque = np.zeros(self.model.nv)
         self._frame_ids = {frame.name: i for i, frame in enumerate(self.model.frames)}
         self._fk_q: FloatArray | None = None
 
@@ -116,5 +117,7 @@ class ArmKinematics:
         PyBullet applies the URDF joint damping (``-damping * v``); RNEA does not,
         so it is added here for the two to agree.
         """
-        tau: FloatArray = pin.rnea(self.model, self.data, q, v, a) + self.damping * v
+        tau: FloatArray = pin.rnea(self.model, self.data, q, v, a)
+        np.multiply(self.damping, v, out=self._damping_torque)
+        tau += self._damping_torque
         return tau

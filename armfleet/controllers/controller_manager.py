@@ -79,7 +79,9 @@ class ControllerManager:
                 except Exception as exc:  # contain it to this arm
                     self._fail(f"{controller.name} raised {type(exc).__name__}: {exc}", controller)
                     return
-        if self._fault is None and not math.isfinite(self._arm.body.effort_command.sum()):
+        effort = self._arm.body.effort_command
+        # A dot product is NaN or inf whenever an element is (and cheaper than isfinite().all()).
+        if self._fault is None and not math.isfinite(effort.dot(effort)):
             self._fail("position_controller produced non-finite torques", None)
 
     def reset(self) -> None:

@@ -16,6 +16,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from armfleet.controllers.controller import Controller
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory, MotionPlan
@@ -78,8 +79,17 @@ class PositionController(Controller):
         #: Why the arm is in protective stop, or None.
         self.stop_reason: str | None = None
         self._anchor_when_stopped = False
-        self._acceleration = np.zeros(len(kinematics.joint_names))
-        self._aux_hold = np.zeros(len(self._aux))
+        size = len(kinematics.joint_names)
+        # Full-size (every movable joint) buffers, reused at every update: the arm
+        # joints' reference comes from Ruckig, the others hold where they were.
+        self._arm_part = as_slice(self._arm)
+        self._ref_position = np.zeros(size)
+        self._ref_velocity = np.zeros(size)
+        self._ref_acceleration = np.zeros(size)
+        self._acceleration = np.zeros(size)
+        self._scratch = np.zeros(size)
+        self._saturated = np.zeros(size, dtype=bool)
+        self._negative_effort_limit = -self._effort_limit
         self.trajectory: JerkLimitedTrajectory | None = None
         self._state_topic = self.arm.topic("position_controller/state")
         self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
@@ -103,11 +113,19 @@ class PositionController(Controller):
             np.full(n, self.parameters["max_acceleration_rad_s2"]),
             np.full(n, self.parameters["max_jerk_rad_s3"]),
         )
-        self._aux_hold = body.position[self._aux].copy()
+        self._ref_position[:] = body.position
+        self._ref_velocity[:] = 0.0
+        self._ref_acceleration[:] = 0.0
         body.release_brakes()
 
     def on_deactivate(self) -> None:
         self.arm.body.engage_brakes()
+
+    @property
+    def held_positions(self) -> FloatArray:
+        """Where the joints off the base-tool chain (fingers) are held [rad or m]."""
+        held: FloatArray = self._ref_position[self._aux].copy()
+        return held
 
     @property
     def is_moving(self) -> bool:
@@ -215,18 +233,25 @@ class PositionController(Controller):
         assert trajectory is not None  # set by on_activate
         body = self.arm.body
         q, v = body.position, body.velocity
+        part = self._arm_part
+        reference, scratch = self._ref_position, self._scratch
+        reference[part] = trajectory.position
+        self._ref_velocity[part] = trajectory.velocity
+        self._ref_acceleration[part] = trajectory.acceleration
+        # qdd = qdd_ref + kp (q_ref - q) + kd (v_ref - v), in place (this runs at 1 kHz per arm).
         acceleration = self._acceleration
-        arm, aux = self._arm, self._aux
-        acceleration[arm] = (
-            trajectory.acceleration
-            + self._kp * (trajectory.position - q[arm])
-            + self._kd * (trajectory.velocity - v[arm])
-        )
-        if aux.size:
-            acceleration[aux] = self._kp * (self._aux_hold - q[aux]) - self._kd * v[aux]
+        np.subtract(reference, q, out=acceleration)
+        acceleration *= self._kp
+        np.subtract(self._ref_velocity, v, out=scratch)
+        scratch *= self._kd
+        acceleration += scratch
+        acceleration += self._ref_acceleration
         tau = self.arm.kinematics.inverse_dynamics(q, v, acceleration)
-        self.saturation_steps += np.abs(tau) > self._effort_limit
-        np.clip(tau, -self._effort_limit, self._effort_limit, out=body.effort_command)
+        np.abs(tau, out=scratch)
+        np.greater(scratch, self._effort_limit, out=self._saturated)
+        self.saturation_steps += self._saturated
+        np.minimum(tau, self._effort_limit, out=body.effort_command)
+        np.maximum(body.effort_command, self._negative_effort_limit, out=body.effort_command)
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(
                 self._state_topic,
@@ -236,8 +261,8 @@ class PositionController(Controller):
                     trajectory.position.copy(),
                     trajectory.velocity.copy(),
                     trajectory.acceleration.copy(),
-                    q[arm].copy(),
-                    v[arm].copy(),
+                    q[part].copy(),
+                    v[part].copy(),
                     trajectory.moving,
                 ),
             )
@@ -245,8 +270,15 @@ class PositionController(Controller):
         if self._anchor_when_stopped and not trajectory.moving:
             # Stopped: hold where the arm is (a contact may have blocked it short of
             # the reference), so it does not keep pushing against what it touched.
-            trajectory.position[:] = q[arm]
+            trajectory.position[:] = q[part]
             self._anchor_when_stopped = False
+
+
+def as_slice(indices: npt.NDArray[np.int_]) -> slice | npt.NDArray[np.int_]:
+    """``indices`` as a slice when they are consecutive (faster to index with), else as is."""
+    if indices.size and np.array_equal(indices, np.arange(indices[0], indices[0] + indices.size)):
+        return slice(int(indices[0]), int(indices[0]) + indices.size)
+    return indices
 
 
 def check_target(
