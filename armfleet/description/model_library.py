@@ -69,6 +69,7 @@ class ModelLibrary:
         self._folder = folder or data_dir("description")
         self._resolver = resolver or ResourceResolver()
         self._macros: dict[str, str] = {}
+        self._templates: dict[str, _Template] = {}
 
     @property
     def folder(self) -> Path:
@@ -95,22 +96,54 @@ class ModelLibrary:
         return self._folder / f"{model}{XACRO_SUFFIX}"
 
     def expand(self, model: str, prefix: str, pose: SpawnPose | None = None) -> ArmDescription:
-        """Expand ``model`` for an arm whose names start with ``prefix``, placed at ``pose``."""
-        path = self.path(model)
+        """Expand ``model`` for an arm whose names start with ``prefix``, placed at ``pose``.
+
+        xacro runs once per model with placeholder arguments; each arm is then an
+        instance of that text. The first time, a direct expansion with probe
+        arguments must equal the instance, else this model is expanded directly
+        every time (a description that computes with its arguments).
+        """
         pose = pose or SpawnPose()
+        template = self._templates.get(model)
+        if template is None:
+            template = self._make_template(model)
+            self._templates[model] = template
+        if template.text is None:
+            urdf, _ = self._expand_directly(model, prefix, _pose_arguments(pose))
+        else:
+            urdf = _instantiate(template.text, prefix, pose)
+        ignored = tuple((prefix + a, prefix + b) for a, b in template.ignored_contacts)
+        return ArmDescription(model, prefix, urdf, template.home, ignored)
+
+    def _make_template(self, model: str) -> _Template:
+        text, properties = self._expand_directly(model, PREFIX_TOKEN, (XYZ_TOKEN, RPY_TOKEN))
+        path = self.path(model)
+        home = _parse_home(path, properties.get(HOME_PROPERTY, ""))
+        ignored: tuple[tuple[str, str], ...] = ()
+        if SRDF_PROPERTY in properties:
+            srdf = self._resolver.resolve(properties[SRDF_PROPERTY])
+            ignored = disabled_collision_pairs(srdf.read_text(), "", str(srdf))
+        probe_pose = SpawnPose(0.25, -0.5, 0.125, 30.0, roll_deg=5.0)
+        probe, _ = self._expand_directly(model, "probe_", _pose_arguments(probe_pose))
+        usable = _instantiate(text, "probe_", probe_pose) == probe
+        return _Template(text if usable else None, home, ignored)
+
+    def _expand_directly(
+        self, model: str, prefix: str, pose_arguments: tuple[str, str]
+    ) -> tuple[str, dict[str, str]]:
+        """Run xacro; return the URDF (URIs resolved) and the file's top-level properties."""
+        path = self.path(model)
         properties = _top_level_properties(path)
         upstream_uri = properties.get(UPSTREAM_PROPERTY)
         if upstream_uri is None:
             raise DescriptionError(f"{path}: missing <xacro:property name={UPSTREAM_PROPERTY!r}>")
-        home = _parse_home(path, properties.get(HOME_PROPERTY, ""))
-
         with tempfile.TemporaryDirectory(prefix="armfleet-xacro-") as tmp:
             macro_path = Path(tmp) / f"{model}_upstream.xacro"
             macro_path.write_text(self._upstream_macro(upstream_uri))
             mappings = {
                 "prefix": prefix,
-                "xyz": f"{pose.x!r} {pose.y!r} {pose.z!r}",
-                "rpy": " ".join(repr(angle) for angle in pose.rpy_rad),
+                "xyz": pose_arguments[0],
+                "rpy": pose_arguments[1],
                 "upstream_macro": str(macro_path),
             }
             try:
@@ -119,18 +152,46 @@ class ModelLibrary:
                 problem = " ".join(str(exc).split())  # xacro's messages span lines
                 raise DescriptionError(f"{path}: xacro failed: {problem}") from exc
             _make_massless_links_explicit(document)
+            # The banner names the temporary macro's folder; drop it so texts compare.
+            for node in list(document.childNodes):
+                if node.nodeType == node.COMMENT_NODE:
+                    document.removeChild(node)
             text = document.toprettyxml(indent="  ")
-        ignored: tuple[tuple[str, str], ...] = ()
-        if SRDF_PROPERTY in properties:
-            srdf = self._resolver.resolve(properties[SRDF_PROPERTY])
-            ignored = disabled_collision_pairs(srdf.read_text(), prefix, str(srdf))
-        return ArmDescription(model, prefix, self._resolver.resolve_text(text), home, ignored)
+        return self._resolver.resolve_text(text), properties
 
     def _upstream_macro(self, uri: str) -> str:
         if uri not in self._macros:
             upstream = self._resolver.resolve(uri)
             self._macros[uri] = prefixable_macro(upstream.read_text(), "upstream", str(upstream))
         return self._macros[uri]
+
+
+#: Placeholders xacro is run with once per model; each arm's values replace them.
+PREFIX_TOKEN = "armfleetprefixtoken_"
+XYZ_TOKEN = "armfleet-xyz-token"
+RPY_TOKEN = "armfleet-rpy-token"
+
+
+@dataclass(frozen=True)
+class _Template:
+    """A model expanded with placeholder arguments (``text`` None: can't be templated)."""
+
+    text: str | None
+    home: tuple[float, ...]
+    ignored_contacts: tuple[tuple[str, str], ...]
+
+
+def _pose_arguments(pose: SpawnPose) -> tuple[str, str]:
+    """The xacro ``xyz`` and ``rpy`` arguments of ``pose``."""
+    return (
+        f"{pose.x!r} {pose.y!r} {pose.z!r}",
+        " ".join(repr(angle) for angle in pose.rpy_rad),
+    )
+
+
+def _instantiate(template: str, prefix: str, pose: SpawnPose) -> str:
+    xyz, rpy = _pose_arguments(pose)
+    return template.replace(PREFIX_TOKEN, prefix).replace(XYZ_TOKEN, xyz).replace(RPY_TOKEN, rpy)
 
 
 def _make_massless_links_explicit(document: minidom.Document) -> None:
