@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -139,3 +140,39 @@ def test_a_stopping_world_ends_subscriptions_and_requests_fail_fast(world: World
         client.timeout = 0.5
         with pytest.raises(armfleet.remote.RequestTimeout, match="no answer"):
             client.info()
+
+
+def test_the_readme_live_api_example_runs_as_written(world: WorldProcess) -> None:
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    (example,) = re.findall(r"```py\n(.*?)```", readme, flags=re.DOTALL)
+    exec(compile(example, "README.md", "exec"), {})
+    with armfleet.connect() as client:
+        assert client.info().arms == ("bob", "carol")
+        assert client.info().streams == 0  # the example cleaned up after itself
+
+
+def test_spawn_options_publish_and_reset_reach_the_world(world: WorldProcess) -> None:
+    start = [0.1, -0.5, 0.2, -2.0, 0.1, 1.8, 0.5]
+    with armfleet.connect() as client:
+        dave = client.spawn(
+            "dave",
+            model="panda",
+            at="3,0,0,90",
+            initial_positions=start,
+            parameters={"position_controller": {"max_acceleration_rad_s2": 2.0}},
+        )
+        assert dave.pose == armfleet.SpawnPose(3, 0, 0, 90)
+        assert np.abs(dave.positions - start).max() < HOLD_TOLERANCE_RAD
+        target = np.array(start) + 0.1
+        client.publish("/dave/position_controller/commands", target)
+        dave.wait(timeout=30)
+        assert np.abs(dave.positions - target).max() < HOLD_TOLERANCE_RAD
+        dave.reset_stop()  # nothing to reset: accepted all the same
+        assert dave.mode is armfleet.messages.ArmMode.HOLDING
+        assert client.topics()["/dave/position_controller/commands"].command
+        with pytest.raises(armfleet.ArmfleetError, match="max_acceleration_rad_s2 = -1"):
+            client.spawn(
+                "erin",
+                at=(4, 0),
+                parameters={"position_controller": {"max_acceleration_rad_s2": -1.0}},
+            )
