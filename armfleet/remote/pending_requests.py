@@ -14,7 +14,7 @@ from typing import Any
 from armfleet.errors import ArmfleetError
 from armfleet.remote.errors import ConnectionLost, RequestTimeout
 from armfleet.remote.outbox import Outbox
-from armfleet.remote.protocol import Service
+from armfleet.remote.protocol import MAX_PENDING_REQUESTS, Service
 from armfleet.remote.run_state import RunState
 from armfleet.remote.wakeup import Wakeup
 from armfleet.world import World
@@ -62,6 +62,7 @@ class PendingRequests:
         finish: Callable[[Any], Any] | None = None,
     ) -> None:
         """Run ``work`` at the next step boundary; cancel it if not started within ``timeout``."""
+        self._check_room()
         try:
             future = self._world.submit(work)
         except queue.Full:
@@ -78,6 +79,7 @@ class PendingRequests:
         what: str,
     ) -> None:
         """Run ``check`` at every step boundary until it returns something (the reply)."""
+        self._check_room()
         outcome: Future[Any] = Future()
         outcome.set_running_or_notify_cancel()
         deadline = time.monotonic() + timeout
@@ -110,6 +112,12 @@ class PendingRequests:
 
         poll(None)
         self._track(_Pending(peer, request_id, Service.WAIT, outcome, timeout, None))
+
+    def _check_room(self) -> None:
+        if len(self._pending) >= MAX_PENDING_REQUESTS:
+            raise ArmfleetError(
+                f"the world has {len(self._pending)} requests in flight; try again shortly"
+            )
 
     def _track(self, pending: _Pending) -> None:
         key = next(self._keys)

@@ -37,6 +37,8 @@ MAX_QUEUE_SIZE = 10_000
 MAX_SUBSCRIPTIONS_PER_STREAM = 256
 #: Streams one server serves at once.
 MAX_STREAMS = 256
+#: Requests one server keeps in flight at once (waits included).
+MAX_PENDING_REQUESTS = 256
 #: Longest time a request may wait in the world's queue, whatever the client asks [s].
 MAX_REQUEST_TIMEOUT_S = 600.0
 

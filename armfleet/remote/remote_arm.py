@@ -16,6 +16,8 @@ if TYPE_CHECKING:
 
 #: Default wait for a motion to finish [s of wall time].
 WAIT_TIMEOUT_S = 30.0
+#: Extra wait for the world's answer to a wait [s].
+WAIT_REPLY_MARGIN_S = 2.0
 
 
 class RemoteArm:
@@ -100,7 +102,9 @@ class RemoteArm:
             RemoteError: the arm stopped on a contact, faulted or left the world.
             RequestTimeout: still moving after ``timeout`` [s of wall time].
         """
-        result = self._client.call("wait", {"name": self._name}, timeout=timeout)
+        args = {"name": self._name, "timeout_s": timeout}
+        # The world answers within ``timeout``; the margin lets its answer arrive.
+        result = self._client.call("wait", args, timeout=timeout + WAIT_REPLY_MARGIN_S)
         state: JointState = decode_message("JointState", result["joint_state"])
         return state
 

@@ -250,8 +250,9 @@ class WorldServer:
             self._pending.submit(peer, request_id, service, subscribe, timeout, register)
         elif service is Service.WAIT:
             name = args.text("name")
+            duration = args.number("timeout_s", timeout, low=0.0, high=MAX_REQUEST_TIMEOUT_S)
             check = self._services.wait_check(name)
-            self._pending.wait(peer, request_id, check, timeout, f"{name} is still moving")
+            self._pending.wait(peer, request_id, check, duration, f"{name} is still moving")
         else:
             work = self._services.prepare(service, args)
             assert work is not None  # every other service is plain

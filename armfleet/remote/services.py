@@ -43,7 +43,7 @@ FIELDS: dict[Service, tuple[str, ...]] = {
     Service.SPAWN: ("name", "model", "at", "initial_positions", "parameters"),
     Service.REMOVE: ("name",),
     Service.MOVE: ("name", "positions"),
-    Service.WAIT: ("name",),
+    Service.WAIT: ("name", "timeout_s"),
     Service.RESET: ("name", "stop_only"),
     Service.TOPICS: (),
     Service.SUBSCRIBE: ("topic", "stream", "sub", "rate_hz", "queue_size"),
