@@ -24,7 +24,7 @@ from tests.viewer_helpers import expected_visual_poses
 
 CHROMIUM = Path("/usr/bin/chromium")
 #: FIELD-NOTES: software WebGL via SwiftShader; never --use-gl=swiftshader (all white).
-CHROMIUM_FLAGS = [
+CHROMIUM_FLAGS = (
     "--no-sandbox",
     "--disable-gpu",
     "--disable-quic",
@@ -33,8 +33,8 @@ CHROMIUM_FLAGS = [
     "--disable-component-update",
     "--disable-sync",
     "--enable-unsafe-swiftshader",
-]
-VIEWPORT = {"width": 960, "height": 600}
+)
+VIEWPORT_WIDTH, VIEWPORT_HEIGHT = 960, 600
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
 #: Software WebGL on 2 cores takes seconds per Panda; leave a wide margin.
 LOAD_TIMEOUT_MS = 90_000
@@ -176,7 +176,7 @@ class LivePage:
 def live_page(browser: Any, live: armfleet.World) -> Iterator[LivePage]:
     """The live page, with both arms' meshes loaded."""
     assert live.viewer is not None
-    tab = browser.new_page(viewport=VIEWPORT)
+    tab = browser.new_page(viewport={"width": VIEWPORT_WIDTH, "height": VIEWPORT_HEIGHT})
     try:
         started = time.perf_counter()
         tab.goto(live.viewer.url)
@@ -277,7 +277,7 @@ def test_page_follows_toby_and_not_bob(live_page: LivePage, live: armfleet.World
 def test_replay_plays_from_file(browser: Any, live: armfleet.World, tmp_path: Path) -> None:
     assert live.viewer is not None
     replay = live.viewer.save(tmp_path / "run.html")
-    tab = browser.new_page(viewport=VIEWPORT)
+    tab = browser.new_page(viewport={"width": VIEWPORT_WIDTH, "height": VIEWPORT_HEIGHT})
     try:
         tab.goto(replay.resolve().as_uri())
         tab.wait_for_function(

@@ -156,6 +156,12 @@ class SceneNode:
         if self.animation is not None:
             yield self.animation
 
+    def live_state(self) -> Iterator[bytes]:
+        """What live updates set: properties and transform (objects are never skipped)."""
+        yield from self.properties.values()
+        if self.transform is not None:
+            yield self.transform
+
     def commands(self) -> Iterator[Message]:
         """Every command of this subtree, parents before children."""
         yield from self.state()
@@ -219,7 +225,7 @@ class BrowserSocket(tornado.websocket.WebSocketHandler):
         for path in stale:
             node = self.bridge.tree.get(path)
             if node is not None:
-                messages.extend(node.state())
+                messages.extend(node.live_state())
         self.write_all(messages)
 
 

@@ -10,17 +10,15 @@ asks for one last refresh so the browser shows where the arms came to rest.
 
 from __future__ import annotations
 
-import logging
 import threading
 from collections.abc import Callable
 
 from armfleet.viewer.commands import Updates
-from armfleet.viewer.connection import BridgeConnection
+from armfleet.viewer.connection import REQUEST_TIMEOUT_S, BridgeConnection
 from armfleet.viewer.errors import ViewerError
 
-logger = logging.getLogger("armfleet")
-
-STOP_TIMEOUT_S = 5.0
+#: Longer than a request may take, so that a stopped thread has let go of its socket.
+STOP_TIMEOUT_S = REQUEST_TIMEOUT_S + 2.0
 
 
 class UpdatePublisher:

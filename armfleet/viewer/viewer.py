@@ -15,6 +15,7 @@ Pinocchio's visualizer, ZMQ and tornado load when a viewer starts.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 import warnings
@@ -77,7 +78,7 @@ class Viewer:
         display_rate_hz: live updates per second of wall time.
 
     Raises:
-        ViewerError: the server could not start or does not answer.
+        ViewerError: the server could not start or does not answer, or a bad rate.
     """
 
     def __init__(
@@ -88,6 +89,10 @@ class Viewer:
         show_targets: bool = True,
         display_rate_hz: float = DISPLAY_RATE_HZ,
     ) -> None:
+        if not (math.isfinite(display_rate_hz) and 0 < display_rate_hz <= 1000):
+            raise ViewerError(
+                f"display rate {display_rate_hz} Hz is invalid; choose one in (0, 1000] Hz"
+            )
         import zmq
 
         with warnings.catch_warnings():  # meshcat 0.3 imports a deprecated pyzmq module
