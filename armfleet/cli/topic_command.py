@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import os
 import queue
 import sys
 from typing import Any
@@ -70,21 +69,17 @@ def echo_topic(args: argparse.Namespace) -> int:
 
     with connect_from(args) as client:
         subscription = client.subscribe(args.topic, keep, rate_hz=rate)
-        try:
-            while True:
-                try:
-                    message = received.get(timeout=0.25)
-                except queue.Empty:
-                    if not subscription.active:
-                        raise subscription.error or ConnectionLost("the world went away") from None
-                    continue
-                sys.stdout.write(format_message(message) + "---\n")
-                sys.stdout.flush()
-                if args.once:
-                    return 0
-        except BrokenPipeError:  # e.g. piped into head: stop quietly
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-            return 0
+        while True:  # until --once, Ctrl-C, or a closed pipe (armfleet ... | head)
+            try:
+                message = received.get(timeout=0.25)
+            except queue.Empty:
+                if not subscription.active:
+                    raise subscription.error or ConnectionLost("the world went away") from None
+                continue
+            sys.stdout.write(format_message(message) + "---\n")
+            sys.stdout.flush()
+            if args.once:
+                return 0
 
 
 def format_message(message: Any) -> str:
