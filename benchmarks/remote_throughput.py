@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import statistics
@@ -57,10 +58,21 @@ def start_world(runtime: Path, realtime: bool) -> tuple[subprocess.Popen[str], s
     raise RuntimeError("the world did not start")
 
 
-def realtime_factor(client: armfleet.remote.Client, seconds: float) -> float:
-    start_sim, start_wall = client.info().time_s, time.perf_counter()
+def cpu_seconds(pid: int) -> float:
+    """CPU time process ``pid`` has used [s] (Linux; NaN elsewhere)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return math.nan
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def world_cost(client: armfleet.remote.Client, pid: int, seconds: float) -> tuple[float, float]:
+    """The world's real-time factor, and its CPU time per simulated second, over ``seconds``."""
+    sim0, wall0, cpu0 = client.info().time_s, time.perf_counter(), cpu_seconds(pid)
     time.sleep(seconds)
-    return (client.info().time_s - start_sim) / (time.perf_counter() - start_wall)
+    sim1, wall1, cpu1 = client.info().time_s, time.perf_counter(), cpu_seconds(pid)
+    return (sim1 - sim0) / (wall1 - wall0), (cpu1 - cpu0) / (sim1 - sim0)
 
 
 class Counter:
@@ -84,20 +96,20 @@ class Counter:
         return round((self.last - self.first) * PUBLISH_RATE_HZ) + 1 if self.count else 0
 
 
-def measure_stream(client: armfleet.remote.Client, seconds: float) -> dict[str, Any]:
+def measure_stream(client: armfleet.remote.Client, pid: int, seconds: float) -> dict[str, Any]:
     counters = [Counter() for _ in range(ARMS)]
     subscriptions = [
         client.subscribe(f"/a{i}/joint_states", counter, queue_size=1000)
         for i, counter in enumerate(counters)
     ]
     time.sleep(1.0)  # let the stream settle
-    sim0, wall0 = client.info().time_s, time.perf_counter()
+    sim0, wall0, cpu0 = client.info().time_s, time.perf_counter(), cpu_seconds(pid)
     for counter in counters:
         counter.counting = True
     time.sleep(seconds)
     for counter in counters:
         counter.counting = False
-    sim1, wall1 = client.info().time_s, time.perf_counter()
+    sim1, wall1, cpu1 = client.info().time_s, time.perf_counter(), cpu_seconds(pid)
     dropped = sum(s.dropped for s in subscriptions)
     for subscription in subscriptions:
         subscription.cancel()
@@ -110,6 +122,7 @@ def measure_stream(client: armfleet.remote.Client, seconds: float) -> dict[str, 
         "delivered_fraction": delivered / max(1, published),
         "dropped_total": dropped,
         "realtime_factor_with_subscriber": (sim1 - sim0) / wall,
+        "world_cpu_s_per_sim_s_with_subscriber": (cpu1 - cpu0) / (sim1 - sim0),
     }
 
 
@@ -136,13 +149,14 @@ def run(realtime: bool, seconds: float, moves: int) -> dict[str, Any]:
         process, address = start_world(Path(runtime), realtime)
         try:
             with armfleet.connect(address, timeout=30.0) as client:
-                idle_rtf = realtime_factor(client, 2.0)
+                idle_rtf, idle_cpu = world_cost(client, process.pid, 2.0)
                 latency = measure_moves(client, moves)
-                stream = measure_stream(client, seconds)
+                stream = measure_stream(client, process.pid, seconds)
             return {
                 "mode": "realtime" if realtime else "fast",
                 "arms": ARMS,
                 "realtime_factor_without_subscriber": idle_rtf,
+                "world_cpu_s_per_sim_s_without_subscriber": idle_cpu,
                 **stream,
                 **latency,
             }
@@ -163,13 +177,19 @@ def main() -> None:
             f"to one subscriber (world published {r['published_msgs_per_s']:.0f}/s, "
             f"{100 * r['delivered_fraction']:.1f}% delivered, {r['dropped_total']} dropped); "
             f"RTF {r['realtime_factor_without_subscriber']:.2f} without / "
-            f"{r['realtime_factor_with_subscriber']:.2f} with the subscriber; "
+            f"{r['realtime_factor_with_subscriber']:.2f} with the subscriber, world CPU "
+            f"{r['world_cpu_s_per_sim_s_without_subscriber']:.2f} / "
+            f"{r['world_cpu_s_per_sim_s_with_subscriber']:.2f} s per simulated s; "
             f"move round trip median {r['rtt_median_ms']:.2f} ms, p95 {r['rtt_p95_ms']:.2f} ms"
         )
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     report = {
         "command": "python benchmarks/remote_throughput.py",
-        "machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
+        "machine": {
+            "cpus": os.cpu_count(),
+            "python": platform.python_version(),
+            "load_average_1min": os.getloadavg()[0],
+        },
         "armfleet": armfleet.__version__,
         "results": results,
     }

@@ -4,8 +4,9 @@ The server thread never touches the world. It reads requests, checks them, and
 hands the work to the stepping thread with ``world.submit`` (run at the next
 step boundary, in order); a finished future wakes it to send the reply. Topic
 messages reach it through bounded per-subscription queues filled by bus
-callbacks in the stepping thread. So a slow, dead or malicious client costs the
-world a few microseconds per message at most.
+callbacks in the stepping thread, which it empties every 2 ms in batches. So a
+slow, dead or malicious client costs the world a few microseconds per message
+at most.
 """
 
 from __future__ import annotations
@@ -47,6 +48,8 @@ logger = logging.getLogger("armfleet")
 DEFAULT_REQUEST_TIMEOUT_S = 30.0
 #: Frames ZeroMQ queues for one peer before the server holds back (then drops oldest).
 SEND_HWM = 64
+#: Period at which queued topic messages are sent [s]: at most this much added latency.
+STREAM_FLUSH_PERIOD_S = 0.002
 #: Requests read in one go before replies and streams get a turn.
 READ_BURST = 256
 _REQUEST_KEYS = ("id", "op", "args", "timeout_s")
@@ -109,7 +112,7 @@ class WorldServer:
         outbox = Outbox(self._socket)
         self._services = WorldServices(world, run_state, self.address)
         self._pending = PendingRequests(world, outbox, self._wakeup, run_state)
-        self._streams = StreamHub(world, outbox, self._wakeup.signal)
+        self._streams = StreamHub(world, outbox)
         self._outbox = outbox
         self._stopping = threading.Event()
         self._closed = False
@@ -173,8 +176,10 @@ class WorldServer:
             while not self._stopping.is_set():
                 wake_at = min(next_tick, self._pending.next_deadline() or next_tick)
                 timeout = wake_at - time.monotonic()
-                if self._streams.has_backlog:
-                    timeout = min(timeout, 0.005)  # retry slow clients soon
+                if self._streams.subscription_count:
+                    # Streams are flushed on this beat, in batches: cheaper for the world
+                    # than a wake-up per message.
+                    timeout = min(timeout, STREAM_FLUSH_PERIOD_S)
                 poller.poll(max(0, round(timeout * 1000)))
                 self._wakeup.clear()
                 self._receive()

@@ -101,13 +101,11 @@ class StreamHub:
     Args:
         world: the world whose bus the subscriptions are on.
         outbox: where frames go.
-        on_push: called by the stepping thread after it queues a message.
     """
 
-    def __init__(self, world: World, outbox: Outbox, on_push: Callable[[], None]) -> None:
+    def __init__(self, world: World, outbox: Outbox) -> None:
         self._world = world
         self._outbox = outbox
-        self._on_push = on_push
         self._by_peer: dict[bytes, Stream] = {}
         self._by_token: dict[str, Stream] = {}
 
@@ -117,12 +115,7 @@ class StreamHub:
 
     @property
     def subscription_count(self) -> int:
-        return sum(len(s.subscriptions) for s in self._by_peer.values())
-
-    @property
-    def has_backlog(self) -> bool:
-        """Whether some slow client has a frame held back (retry soon)."""
-        return any(s.held is not None for s in self._by_peer.values())
+        return sum(len(s.subscriptions) for s in self.streams)
 
     def attach(self, peer: bytes) -> Stream:
         """The stream of ``peer`` (created on first use)."""
@@ -163,7 +156,7 @@ class StreamHub:
             raise ArmfleetError(
                 f"subscribe: a stream holds at most {MAX_SUBSCRIPTIONS_PER_STREAM} subscriptions"
             )
-        queue = SubscriptionQueue(size, rate, on_push=self._on_push)
+        queue = SubscriptionQueue(size, rate)
 
         def register(result: Any) -> dict[str, Any]:
             handle, type_name = result
