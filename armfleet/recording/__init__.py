@@ -1,0 +1,38 @@
+"""Recording a world's topics to MCAP, and what to do with a recording: info, plots, replay.
+
+>>> recorder = armfleet.record(world, "run.mcap")      # doctest: +SKIP
+>>> world.run(2.0); recorder.stop()                    # doctest: +SKIP
+>>> run = armfleet.open_recording("run.mcap")          # doctest: +SKIP
+>>> armfleet.plot_recording(run)                       # doctest: +SKIP
+"""
+
+from armfleet.recording.arm_record import ArmRecord
+from armfleet.recording.errors import (
+    NotARecording,
+    RecordingError,
+    RecordingNotFound,
+    UnknownRecordedArm,
+)
+from armfleet.recording.plot import plot_recording
+from armfleet.recording.reader import RecordedMessage, Recording, TopicInfo, open_recording
+from armfleet.recording.recorder import Recorder, record
+from armfleet.recording.replay import ReplayPlayer, export_html
+from armfleet.recording.replay_stream import replay_events
+
+__all__ = [
+    "ArmRecord",
+    "NotARecording",
+    "RecordedMessage",
+    "Recorder",
+    "Recording",
+    "RecordingError",
+    "RecordingNotFound",
+    "ReplayPlayer",
+    "TopicInfo",
+    "UnknownRecordedArm",
+    "export_html",
+    "open_recording",
+    "plot_recording",
+    "record",
+    "replay_events",
+]

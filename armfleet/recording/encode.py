@@ -1,0 +1,352 @@
+"""Bus messages to the JSON of :mod:`armfleet.recording.schemas`, fast enough for 1 kHz topics.
+
+A recorder encodes every joint state, controller state and ``/tf`` message of
+every arm at the physics rate, so the encoders of those three fill a per-topic
+template (built once per set of joint or frame names) with all the numbers of
+a message in one ``%`` operation. Numbers are written with 17 significant
+digits: reading them back gives the very same doubles. A message holding a
+non-finite number takes the slow path, which writes ``null`` for it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import json
+import math
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+import numpy as np
+
+from armfleet.messages import ControllerState, JointCommand, JointState, TFMessage
+from armfleet.recording.schemas import (
+    CONTROLLER_STATE,
+    FLOAT64_MULTI_ARRAY,
+    JOINT_STATE,
+    OWN_PACKAGE,
+    STRING,
+    TF_MESSAGE,
+    MessageSchema,
+    dataclass_schema,
+)
+
+NS_PER_S = 1_000_000_000
+#: printf format of a number: 17 significant digits round-trip every double.
+NUMBER = "%.17g"
+_HEADER = '"header":{"stamp":{"sec":%d,"nanosec":%d,"nsec":%d},"frame_id":""}'
+
+
+class MessageEncoder(Protocol):
+    """Turns messages of one type into JSON bytes matching :attr:`schema`."""
+
+    @property
+    def schema(self) -> MessageSchema: ...
+
+    def __call__(self, message: Any) -> bytes: ...
+
+
+def stamp_ns(seconds: float) -> int:
+    """Simulated time [s] as integer nanoseconds (MCAP log times, ROS stamps)."""
+    return round(seconds * NS_PER_S)
+
+
+def _stamp(seconds: float) -> tuple[int, int]:
+    sec, nanosec = divmod(round(seconds * NS_PER_S), NS_PER_S)
+    return sec, nanosec
+
+
+def header(seconds: float, frame_id: str = "") -> dict[str, Any]:
+    """A ROS ``std_msgs/msg/Header`` as JSON values."""
+    sec, nanosec = _stamp(seconds)
+    return {"stamp": {"sec": sec, "nanosec": nanosec, "nsec": nanosec}, "frame_id": frame_id}
+
+
+def dumps(value: Any) -> bytes:
+    """Compact JSON (no NaN: callers pass finite numbers or None)."""
+    return json.dumps(value, separators=(",", ":"), allow_nan=False).encode()
+
+
+def finite_list(values: Any) -> list[float | None]:
+    """Numbers as a list, ``None`` (JSON ``null``) where not finite."""
+    flat = np.asarray(values, dtype=float).ravel().tolist()
+    return [v if math.isfinite(v) else None for v in flat]
+
+
+def _literal(value: Any) -> str:
+    """JSON text of ``value``, safe inside a ``%`` template."""
+    return json.dumps(value, separators=(",", ":")).replace("%", "%%")
+
+
+def _numbers(count: int) -> str:
+    return "[" + ",".join([NUMBER] * count) + "]"
+
+
+# -- sensor_msgs/msg/JointState ----------------------------------------------------------
+class JointStateEncoder:
+    """``JointState`` -> ``sensor_msgs/msg/JointState``."""
+
+    schema = JOINT_STATE
+
+    def __init__(self) -> None:
+        self._templates: dict[tuple[str, ...], str] = {}
+
+    def __call__(self, message: JointState) -> bytes:
+        n = len(message.name)
+        values = np.concatenate((message.position, message.velocity, message.effort))
+        if values.shape != (3 * n,) or not np.isfinite(values).all():
+            return dumps(
+                {
+                    "header": header(message.stamp),
+                    "name": list(message.name),
+                    "position": finite_list(message.position),
+                    "velocity": finite_list(message.velocity),
+                    "effort": finite_list(message.effort),
+                }
+            )
+        template = self._templates.get(message.name)
+        if template is None:
+            array = _numbers(n)
+            template = (
+                f'{{{_HEADER},"name":{_literal(list(message.name))},"position":{array},'
+                f'"velocity":{array},"effort":{array}}}'
+            )
+            self._templates[message.name] = template
+        sec, nanosec = _stamp(message.stamp)
+        return (template % (sec, nanosec, nanosec, *values.tolist())).encode()
+
+
+# -- control_msgs/msg/JointTrajectoryControllerState -------------------------------------
+class ControllerStateEncoder:
+    """``ControllerState`` -> ``control_msgs/msg/JointTrajectoryControllerState``.
+
+    ``error.positions`` is reference - feedback, the tracking error.
+    """
+
+    schema = CONTROLLER_STATE
+
+    def __init__(self) -> None:
+        self._templates: dict[tuple[str, ...], str] = {}
+
+    def __call__(self, message: ControllerState) -> bytes:
+        n = len(message.name)
+        reference, position = message.reference_position, message.position
+        values = np.concatenate(
+            (
+                reference,
+                message.reference_velocity,
+                message.reference_acceleration,
+                position,
+                message.velocity,
+                reference - position,
+            )
+        )
+        if values.shape != (6 * n,) or not np.isfinite(values).all():
+            return dumps(
+                {
+                    "header": header(message.stamp),
+                    "joint_names": list(message.name),
+                    "reference": {
+                        "positions": finite_list(reference),
+                        "velocities": finite_list(message.reference_velocity),
+                        "accelerations": finite_list(message.reference_acceleration),
+                    },
+                    "feedback": {
+                        "positions": finite_list(position),
+                        "velocities": finite_list(message.velocity),
+                    },
+                    "error": {
+                        "positions": finite_list(np.subtract(reference, position)),
+                        "velocities": [],
+                    },
+                    "moving": bool(message.moving),
+                }
+            )
+        template = self._templates.get(message.name)
+        if template is None:
+            array = _numbers(n)
+            template = (
+                f'{{{_HEADER},"joint_names":{_literal(list(message.name))},'
+                f'"reference":{{"positions":{array},"velocities":{array},'
+                f'"accelerations":{array}}},'
+                f'"feedback":{{"positions":{array},"velocities":{array}}},'
+                f'"error":{{"positions":{array},"velocities":[]}},"moving":%s}}'
+            )
+            self._templates[message.name] = template
+        sec, nanosec = _stamp(message.stamp)
+        moving = "true" if message.moving else "false"
+        return (template % (sec, nanosec, nanosec, *values.tolist(), moving)).encode()
+
+
+# -- tf2_msgs/msg/TFMessage --------------------------------------------------------------
+def rotation_to_quaternion(m: Sequence[float]) -> tuple[float, float, float, float]:
+    """Unit quaternion ``(x, y, z, w)`` of the rotation in a row-major 4x4 (or 3x4) matrix.
+
+    Built from the largest of ``|w|, |x|, |y|, |z|``, so it is exact near
+    half turns too (URDFs are full of ``rpy="3.14159 ..."``).
+    """
+    r00, r01, r02, _, r10, r11, r12, _, r20, r21, r22 = m[:11]
+    trace = r00 + r11 + r22
+    if trace > 0.0:
+        s = 0.5 / math.sqrt(trace + 1.0)
+        return (r21 - r12) * s, (r02 - r20) * s, (r10 - r01) * s, 0.25 / s
+    if r00 > r11 and r00 > r22:
+        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
+        return 0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s
+    if r11 > r22:
+        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
+        return (r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s
+    s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
+    return (r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s
+
+
+def _transform_template(frame_id: str, child_frame_id: str) -> str:
+    return (
+        '{"header":{"stamp":{"sec":%d,"nanosec":%d,"nsec":%d},'
+        f'"frame_id":{_literal(frame_id)}}},"child_frame_id":{_literal(child_frame_id)},'
+        f'"transform":{{"translation":{{"x":{NUMBER},"y":{NUMBER},"z":{NUMBER}}},'
+        f'"rotation":{{"x":{NUMBER},"y":{NUMBER},"z":{NUMBER},"w":{NUMBER}}}}}}}'
+    )
+
+
+class TFMessageEncoder:
+    """``TFMessage`` -> ``tf2_msgs/msg/TFMessage`` (4x4 matrices as translation + quaternion)."""
+
+    schema = TF_MESSAGE
+
+    def __init__(self) -> None:
+        self._templates: dict[tuple[tuple[str, str], ...], str] = {}
+
+    def __call__(self, message: TFMessage) -> bytes:
+        transforms = message.transforms
+        if not transforms:
+            return b'{"transforms":[]}'
+        matrices = np.array([t.matrix for t in transforms], dtype=float)
+        if matrices.shape[1:] != (4, 4) or not np.isfinite(matrices).all():
+            return dumps(
+                {
+                    "transforms": [
+                        self._plain(t, m) for t, m in zip(transforms, matrices, strict=True)
+                    ]
+                }
+            )
+        key = tuple((t.frame_id, t.child_frame_id) for t in transforms)
+        template = self._templates.get(key)
+        if template is None:
+            parts = ",".join(_transform_template(parent, child) for parent, child in key)
+            template = '{"transforms":[' + parts + "]}"
+            self._templates[key] = template
+        values: list[float | int] = []
+        for transform, row in zip(
+            transforms, matrices.reshape(len(transforms), 16).tolist(), strict=True
+        ):
+            sec, nanosec = _stamp(transform.stamp)
+            values += (sec, nanosec, nanosec, row[3], row[7], row[11])
+            values += rotation_to_quaternion(row)
+        return (template % tuple(values)).encode()
+
+    @staticmethod
+    def _plain(transform: Any, matrix: Any) -> dict[str, Any]:
+        row = np.asarray(matrix, dtype=float).ravel().tolist()
+        rotation = rotation_to_quaternion(row) if np.isfinite(row).all() else (None,) * 4
+        translation = finite_list([row[3], row[7], row[11]])
+        return {
+            "header": header(transform.stamp, transform.frame_id),
+            "child_frame_id": transform.child_frame_id,
+            "transform": {
+                "translation": dict(zip("xyz", translation, strict=True)),
+                "rotation": dict(zip("xyzw", rotation, strict=True)),
+            },
+        }
+
+
+# -- std_msgs ----------------------------------------------------------------------------
+class JointCommandEncoder:
+    """``JointCommand`` -> ``std_msgs/msg/Float64MultiArray``."""
+
+    schema = FLOAT64_MULTI_ARRAY
+
+    def __call__(self, message: JointCommand) -> bytes:
+        return dumps(
+            {"layout": {"dim": [], "data_offset": 0}, "data": finite_list(message.positions)}
+        )
+
+
+class StringEncoder:
+    """A ``str`` -> ``std_msgs/msg/String``."""
+
+    schema = STRING
+
+    def __call__(self, message: str) -> bytes:
+        return dumps({"data": message})
+
+
+# -- anything else -----------------------------------------------------------------------
+def plain(value: Any) -> Any:
+    """``value`` as JSON values: dataclasses as objects (``stamp`` as a ROS header),
+    enums as their value, arrays as lists, non-finite numbers as ``None``."""
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, np.ndarray):
+        return finite_list(value) if value.dtype.kind in "fiu" else plain(value.tolist())
+    if isinstance(value, np.generic):
+        return plain(value.item())
+    if isinstance(value, enum.Enum):
+        return plain(value.value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields: dict[str, Any] = {}
+        for field in dataclasses.fields(value):
+            item = getattr(value, field.name)
+            if field.name == "stamp":
+                fields["header"] = header(float(item))
+            else:
+                fields[field.name] = plain(item)
+        return fields
+    if isinstance(value, list | tuple):
+        return [plain(item) for item in value]
+    if isinstance(value, dict):
+        return {str(key): plain(item) for key, item in value.items()}
+    return str(value)
+
+
+class DataclassEncoder:
+    """Any dataclass message -> ``armfleet_msgs/msg/<Class>`` (schema derived from it)."""
+
+    def __init__(self, message_type: type) -> None:
+        self.schema = dataclass_schema(message_type)
+
+    def __call__(self, message: Any) -> bytes:
+        return dumps(plain(message))
+
+
+class AnyEncoder:
+    """A message of no dataclass type: its JSON form, under a schema that admits anything."""
+
+    def __init__(self, message_type: type) -> None:
+        self.schema = MessageSchema(
+            OWN_PACKAGE + message_type.__name__,
+            {"title": message_type.__name__, "description": "any JSON value"},
+        )
+
+    def __call__(self, message: Any) -> bytes:
+        return dumps(plain(message))
+
+
+_ROS_ENCODERS: dict[type, Callable[[], MessageEncoder]] = {
+    JointState: JointStateEncoder,
+    ControllerState: ControllerStateEncoder,
+    TFMessage: TFMessageEncoder,
+    JointCommand: JointCommandEncoder,
+}
+
+
+def encoder_for(message_type: type) -> MessageEncoder:
+    """A new encoder for messages of ``message_type`` (one per channel: it keeps templates)."""
+    ros = _ROS_ENCODERS.get(message_type)
+    if ros is not None:
+        return ros()
+    if dataclasses.is_dataclass(message_type):
+        return DataclassEncoder(message_type)
+    return AnyEncoder(message_type)

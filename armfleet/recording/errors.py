@@ -1,0 +1,34 @@
+"""Errors a user can cause with recordings: a missing file, not an MCAP, an unknown arm."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from armfleet.errors import ArmfleetError
+
+
+class RecordingError(ArmfleetError):
+    """A recording that cannot be written or read."""
+
+
+class RecordingNotFound(RecordingError):
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        super().__init__(f"no recording at {path}: the file does not exist")
+
+
+class NotARecording(RecordingError):
+    def __init__(self, path: Path, reason: str) -> None:
+        self.path = path
+        self.reason = reason
+        super().__init__(f"{path} is not an MCAP recording ({reason})")
+
+
+class UnknownRecordedArm(RecordingError):
+    def __init__(self, path: Path, name: str, arms: Sequence[str], what: str = "") -> None:
+        self.path = path
+        self.name = name
+        self.arms = tuple(arms)
+        listed = ", ".join(sorted(arms)) or "(none)"
+        super().__init__(f"{path} has no arm named {name!r}{what}; arms: {listed}")

@@ -1,0 +1,187 @@
+"""Play a recording back into the MeshCat viewer, or export it as a standalone HTML replay.
+
+Nothing is simulated: the viewer is started without a world, each recorded arm
+is rebuilt from its URDF (:class:`ReplayArm`), and the recorded joint
+positions are pushed at their recorded times (live: paced to the wall clock;
+export: as fast as possible, then :meth:`Viewer.save`).
+
+The viewer takes arms and ticks as a world gives them (``add_arm(arm)``,
+``tick(world)`` reading ``world.time``); :class:`ReplayClock` and
+:class:`ReplayArm` provide just what it reads.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol, cast
+
+from armfleet.bus import Bus
+from armfleet.description import ModelLibrary
+from armfleet.messages import JointCommand
+from armfleet.recording.errors import RecordingError
+from armfleet.recording.reader import Recording
+from armfleet.recording.replay_arm import ReplayArm
+from armfleet.recording.replay_stream import (
+    ArmAppeared,
+    ArmRemoved,
+    JointPositions,
+    MotionChanged,
+    TargetSent,
+    replay_events,
+)
+
+if TYPE_CHECKING:
+    from armfleet.arm import Arm
+    from armfleet.viewer import Viewer
+    from armfleet.world import World
+
+#: Joint states per second and arm taken from the recording (the viewer shows 30).
+REPLAY_RATE_HZ = 60.0
+#: Longest sleep between two checks of the wall clock while paced [s].
+MAX_SLEEP_S = 0.1
+
+
+class ReplayTarget(Protocol):
+    """What a replay drives: the parts of :class:`armfleet.viewer.Viewer` it uses."""
+
+    def add_arm(self, arm: Arm) -> None: ...
+
+    def remove_arm(self, name: str) -> None: ...
+
+    def tick(self, world: World) -> None: ...
+
+
+class ReplayClock:
+    """Stands in for the world in ``Viewer.tick``: the replay's time since the start [s]."""
+
+    def __init__(self) -> None:
+        self.time = 0.0
+
+
+class ReplayPlayer:
+    """Plays ``recording`` into a viewer (or any :class:`ReplayTarget`).
+
+    Args:
+        recording: an armfleet recording.
+        target: the viewer.
+        rate_hz: joint states per second and arm taken from the file; all if None.
+        models: where to find models whose recorded meshes are not on this machine.
+    """
+
+    def __init__(
+        self,
+        recording: Recording,
+        target: ReplayTarget,
+        rate_hz: float | None = REPLAY_RATE_HZ,
+        models: ModelLibrary | None = None,
+    ) -> None:
+        if not recording.arms:
+            raise RecordingError(f"{recording.path} holds no armfleet arm to replay")
+        self._recording = recording
+        self._target = target
+        self._rate_hz = rate_hz
+        self._models = models or ModelLibrary()
+        self._bus = Bus()
+        self.clock = ReplayClock()
+        #: Arms on show, by name.
+        self.arms: dict[str, ReplayArm] = {}
+        self._waiting: dict[str, ReplayArm] = {}  # appeared, shown at their first joint state
+
+    def play(
+        self,
+        speed: float | None = 1.0,
+        on_event: Callable[[float], None] | None = None,
+    ) -> float:
+        """Play to the end; returns the replayed duration [s].
+
+        Args:
+            speed: times real time (1.0: as recorded); None for as fast as possible.
+            on_event: called with the replay time [s] after each event is shown.
+        """
+        if speed is not None and not speed > 0:
+            raise RecordingError(f"replay speed {speed} is invalid; give a factor > 0")
+        start_ns = self._recording.start_ns or 0
+        wall_start = time.monotonic()
+        world = cast("World", self.clock)
+        for event in replay_events(self._recording, self._rate_hz):
+            replay_time = max(0.0, (event.time_ns - start_ns) / 1e9)
+            if speed is not None:
+                _sleep_until(wall_start + replay_time / speed)
+            self._apply(event)
+            self.clock.time = replay_time
+            self._target.tick(world)
+            if on_event is not None:
+                on_event(replay_time)
+        return self.clock.time
+
+    def _apply(self, event: Any) -> None:
+        if isinstance(event, JointPositions):
+            arm = self.arms.get(event.arm) or self._waiting.pop(event.arm, None)
+            if arm is None:
+                return
+            arm.set_positions(event.names, event.positions)
+            if event.arm not in self.arms:
+                self.arms[event.arm] = arm
+                self._target.add_arm(cast("Arm", arm))
+        elif isinstance(event, ArmAppeared):
+            self._remove(event.arm.name)
+            self._waiting[event.arm.name] = ReplayArm(event.arm, self._bus, self._models)
+        elif isinstance(event, ArmRemoved):
+            self._remove(event.name)
+        elif isinstance(event, TargetSent):
+            if event.arm in self.arms:
+                topic = f"/{event.arm}/position_controller/commands"
+                self._bus.publish(topic, JointCommand(event.positions))
+        elif isinstance(event, MotionChanged):
+            arm = self.arms.get(event.arm)
+            if arm is not None:
+                arm.is_moving = event.moving
+
+    def _remove(self, name: str) -> None:
+        self._waiting.pop(name, None)
+        if self.arms.pop(name, None) is not None:
+            self._target.remove_arm(name)
+
+
+def _sleep_until(deadline: float) -> None:
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return
+        time.sleep(min(left, MAX_SLEEP_S))
+
+
+def start_replay_viewer(port: int | None = None) -> Viewer:
+    """A viewer for a replay (no world, no physics).
+
+    Raises:
+        RecordingError: the viewer cannot start.
+    """
+    from armfleet.viewer import start_viewer
+
+    viewer, reason = start_viewer(port)
+    if viewer is None:
+        raise RecordingError(f"cannot replay: {reason}")
+    return viewer
+
+
+def export_html(recording: Recording, path: str | Path, models: ModelLibrary | None = None) -> Path:
+    """Write the standalone HTML replay of ``recording`` to ``path`` (plays from ``file://``).
+
+    Raises:
+        RecordingError: the viewer cannot start, or the file cannot be written.
+    """
+    from armfleet.viewer import ViewerError
+
+    target = Path(path)
+    viewer = start_replay_viewer()
+    try:
+        ReplayPlayer(recording, viewer, models=models).play(speed=None)
+        try:
+            return viewer.save(target)
+        except ViewerError as exc:
+            raise RecordingError(str(exc)) from None
+    finally:
+        viewer.close()
