@@ -101,7 +101,7 @@ class StreamReceiver:
         socket.setsockopt(zmq.LINGER, 0)
         socket.setsockopt(zmq.RCVHWM, RECEIVE_HWM)
         socket.connect(self._address)
-        socket.send(pack({"id": 0, "op": "attach", "args": {}}))
+        socket.send(pack({"id": 0, "op": "attach", "args": {}}), zmq.NOBLOCK)
         last_heard = time.monotonic()
         try:
             while not self._stop.is_set():
