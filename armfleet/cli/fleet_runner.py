@@ -10,6 +10,7 @@ import time
 from types import FrameType
 
 from armfleet.cli.api_options import check_api_arguments, start_api
+from armfleet.cli.record_option import RunRecording
 from armfleet.cli.status_line import status_line
 from armfleet.cli.world_loop import run_world
 from armfleet.launch import launch
@@ -23,7 +24,8 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
     """Bring the spec's arms up, run until ``--duration`` or Ctrl-C/SIGTERM, close cleanly."""
     if hasattr(args, "api_port"):
         check_api_arguments(args)
-    viewer = (spec.world.viewer and not args.no_viewer) or args.record is not None
+    recording = RunRecording(args.record, spec, quiet=args.quiet)
+    viewer = (spec.world.viewer and not args.no_viewer) or recording.needs_viewer
     realtime = spec.world.realtime if args.realtime is None else args.realtime
 
     def say(line: str) -> None:
@@ -36,6 +38,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
     signal.signal(signal.SIGTERM, on_term)  # SIGTERM shuts down like Ctrl-C
 
     def before_spawn(world: World) -> None:
+        recording.start(world)
         if viewer:
             if world.viewer is not None:
                 print(f"viewer: {world.viewer.url}", flush=True)
@@ -71,10 +74,10 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
                 if server is not None:
                     server.close()
         finally:
-            if args.record is not None and world.viewer is not None:
-                world.viewer.save(args.record)
-                say(f"replay saved to {args.record}")
+            recording.save(world)
             world.close()
     except KeyboardInterrupt:
         say("interrupted; shut down cleanly")
+    finally:
+        recording.close()  # an MCAP file is completed even if bring-up failed
     return 0

@@ -13,7 +13,10 @@ from armfleet.cli import (
     launch_command,
     models_command,
     move_command,
+    plot_command,
+    recording_info_command,
     remove_command,
+    replay_command,
     spawn_command,
     topic_command,
     world_commands,
@@ -39,6 +42,9 @@ def build_parser() -> OneLineParser:
     remove_command.add_parser(subparsers)
     topic_command.add_parser(subparsers)
     world_commands.add_parsers(subparsers)
+    recording_info_command.extend_info_parser(subparsers.choices["info"])
+    plot_command.add_parser(subparsers)
+    replay_command.add_parser(subparsers)
     parser.commands = tuple(subparsers.choices)
     return parser
 

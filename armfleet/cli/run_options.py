@@ -6,6 +6,7 @@ import argparse
 import math
 
 from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.record_option import HELP, METAVAR, check_record_path
 
 
 def add_run_arguments(parser: OneLineParser) -> None:
@@ -27,10 +28,7 @@ def add_run_arguments(parser: OneLineParser) -> None:
         "--viewer-port", type=int, default=None, metavar="PORT",
         help="web port of the viewer (default: a free port)",
     )  # fmt: skip
-    parser.add_argument(
-        "--record", metavar="RUN.html", default=None,
-        help="save a standalone HTML replay of the run at exit",
-    )  # fmt: skip
+    parser.add_argument("--record", metavar=METAVAR, default=None, help=HELP)
     parser.add_argument("--quiet", action="store_true", help="no progress or status lines")
 
 
@@ -38,7 +36,6 @@ def check_run_arguments(args: argparse.Namespace) -> None:
     """Raise :class:`UsageError` for run options that make no sense."""
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration >= 0):
         raise UsageError(f"--duration {args.duration} is invalid; give seconds >= 0")
-    if args.record is not None and not args.record.endswith(".html"):
-        raise UsageError(f"--record {args.record} must name an .html file")
+    check_record_path(args.record)
     if args.viewer_port is not None and not 1 <= args.viewer_port <= 65535:
         raise UsageError(f"--viewer-port {args.viewer_port} is invalid; give 1-65535")

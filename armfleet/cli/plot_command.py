@@ -1,0 +1,38 @@
+"""``armfleet plot RUN.mcap [--arm NAME ...] [-o OUT.png]``: tracking plots of a recording."""
+
+from __future__ import annotations
+
+import argparse
+
+from armfleet.cli.parser import OneLineParser
+from armfleet.recording import open_recording, plot_recording
+
+
+def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
+    parser = subparsers.add_parser(
+        "plot",
+        help="plot reference vs measured joints and the tracking error of a recording",
+        description="Plot, per joint, the position controller's reference against the measured "
+        "position and the tracking error, one figure per arm, from the "
+        "/<arm>/position_controller/state messages of a recording (armfleet spawn/launch "
+        "--record RUN.mcap).",
+    )
+    parser.add_argument("recording", metavar="RUN.mcap", help="the recording")
+    parser.add_argument(
+        "--arm", nargs="+", default=None, metavar="NAME",
+        help="arms to plot (default: every arm with a recorded controller state)",
+    )  # fmt: skip
+    parser.add_argument(
+        "-o", "--output", default=None, metavar="OUT.png",
+        help="figure file (.png, .svg or .pdf; with several arms, <OUT>_<arm>.png), or an "
+        "existing folder (default: <RUN>_<arm>.png beside the recording)",
+    )  # fmt: skip
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    recording = open_recording(args.recording)
+    paths = plot_recording(recording, args.arm, args.output)
+    for arm, path in paths.items():
+        print(f"{arm}: {path}")
+    return 0
