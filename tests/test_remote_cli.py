@@ -12,7 +12,7 @@ import pytest
 
 import armfleet
 from armfleet.cli.main import main
-from tests.remote_world import WorldProcess, cli, runtime_file
+from tests.remote_world import WorldProcess, api_threads, cli, runtime_file
 
 
 @pytest.fixture(scope="module")
@@ -73,6 +73,8 @@ def test_a_mistake_against_a_running_world_is_one_line(
     assert says in fails(capsys, *argv)
     with armfleet.connect() as client:
         assert client.info().arms == ("bob",)  # nothing half-done
+        assert client.info().streams == 0  # no stream left open by the failed command
+    assert not api_threads()
 
 
 def test_no_world_running_or_none_answering(

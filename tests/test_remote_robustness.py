@@ -10,6 +10,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -66,6 +67,19 @@ def test_a_stuck_subscriber_does_not_hold_the_world_and_then_gets_fresh_messages
         assert len(received) < (now - times[0]) / 0.001 / 2
         subscription.cancel()
         assert wait_until(lambda: client.info().subscriptions == 0)
+
+
+def test_a_rate_limited_subscription_never_exceeds_its_rate(world: WorldProcess) -> None:
+    stamps: list[float] = []
+    with armfleet.connect(world.address) as client:
+        subscription = client.subscribe("/bob/joint_states", lambda s: stamps.append(s.stamp), 20)
+        time.sleep(1.0)
+        subscription.cancel()
+        count = len(stamps)
+    # The world publishes 1 kHz of simulated time, several times faster than the wall
+    # clock here; the subscriber gets at most 20 a second, however fast the machine.
+    assert 1 <= count <= 20 * 1.0 + 2
+    assert subscription.dropped == 0
 
 
 def test_a_frozen_then_killed_client_process_is_dropped_and_the_world_goes_on(

@@ -119,7 +119,7 @@ def test_pause_stops_at_one_step_still_serves_requests_and_step_advances_exactly
         assert info.paused and info.time_s == paused_at and info.realtime_factor == 0.0
         before = bob.positions
         bob.move_to(before + 0.2)  # accepted while paused, but nothing moves
-        with pytest.raises(armfleet.ArmfleetError, match="bob is still moving after 0.3 s"):
+        with pytest.raises(armfleet.ArmfleetError, match=r"bob is still moving after 0\.3 s"):
             bob.wait(timeout=0.3)
         assert client.info().time_s == paused_at
         assert np.abs(bob.positions - before).max() == 0.0
