@@ -124,9 +124,10 @@ class SceneWatcher:
             if message is None:
                 return
             assert isinstance(message, bytes)
-            command = umsgpack.unpackb(message)
-            with self._lock:
-                self._state.apply(command)
+            decoded = umsgpack.unpackb(message)
+            with self._lock:  # live updates come as arrays of commands
+                for command in decoded if isinstance(decoded, list) else [decoded]:
+                    self._state.apply(command)
                 self._last_message = time.monotonic()
         connection.close()
 

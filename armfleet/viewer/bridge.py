@@ -13,9 +13,13 @@ ZMQ protocol (a REP socket; every request gets one reply):
 - ``[type, path, data]``: one MeshCat command (``set_object``, ``set_transform``,
   ``set_property``, ``delete``, ``set_animation``); kept in the scene tree and
   sent to every browser. Reply ``ok``.
-- ``[b"batch", type, path, data, ...]``: live updates. A browser whose socket
-  is still busy with earlier data skips them and later gets the latest state
-  of each node it missed, so a slow browser only sees fewer frames.
+- ``[b"batch", index, data]``: live updates (``set_transform``, ``set_property``),
+  many commands in one request: ``data`` is their msgpack bytes end to end,
+  ``index`` is ``type NUL path NUL length`` per command, NUL-separated. They
+  reach a page as one websocket message, a msgpack array that armfleet's page
+  unrolls. A page whose socket is still busy with earlier data skips them and
+  later gets the latest state of each node it missed: a slow browser sees
+  fewer frames, and nothing waits for it.
 - ``[b"scene"]``: reply ``[b"scene", command, ...]``, the commands that rebuild
   the current scene, in order.
 - ``[b"ping"]``: reply ``ok``.
@@ -48,6 +52,8 @@ LOOPBACK = "127.0.0.1"
 COMMANDS = frozenset(
     {b"set_object", b"set_transform", b"set_property", b"delete", b"set_animation"}
 )
+#: Commands a batch may carry: they only change the state of existing nodes.
+LIVE_COMMANDS = frozenset({b"set_transform", b"set_property"})
 PARENT_CHECK_MS = 250
 #: armfleet's page (MeshCat's viewer plus a mesh cache); MeshCat's script comes from its package.
 OWN_PAGE_FOLDER = Path(__file__).with_name("static")
@@ -56,6 +62,18 @@ OWN_PAGE_FOLDER = Path(__file__).with_name("static")
 MESH_TAG = "armfleet_mesh"
 
 NodePath = tuple[str, ...]
+
+
+def msgpack_array(items: Sequence[bytes]) -> bytes:
+    """A msgpack array of already-packed ``items``."""
+    count = len(items)
+    if count < 16:
+        head = bytes([0x90 | count])
+    elif count < 2**16:
+        head = b"\xdc" + count.to_bytes(2, "big")
+    else:
+        head = b"\xdd" + count.to_bytes(4, "big")
+    return head + b"".join(items)
 
 
 class SharedMesh(NamedTuple):
@@ -210,23 +228,23 @@ class BrowserSocket(tornado.websocket.WebSocketHandler):
             self._pending = future
             future.add_done_callback(lambda _: self._catch_up())
 
-    def write_latest(self, paths: Sequence[NodePath], messages: Sequence[Message]) -> None:
-        """Send live updates, or remember their nodes if the socket is still busy."""
+    def write_latest(self, paths: Sequence[NodePath], commands: Sequence[bytes]) -> None:
+        """Send live updates as one message, or note their nodes if the socket is busy."""
         if self.busy:
             self._stale.update(paths)
-        else:
-            self.write_all(messages)
+        elif commands:
+            self.write_all([msgpack_array(commands)])
 
     def _catch_up(self) -> None:
         if not self._stale or self.busy:
             return
         stale, self._stale = self._stale, set()
-        messages: list[Message] = []
+        commands: list[bytes] = []
         for path in stale:
             node = self.bridge.tree.get(path)
             if node is not None:
-                messages.extend(node.live_state())
-        self.write_all(messages)
+                commands.extend(node.live_state())
+        self.write_latest(list(stale), commands)
 
 
 class PageHandler(tornado.web.StaticFileHandler):
@@ -253,6 +271,7 @@ class Bridge:
     def __init__(self, web_port: int, parent_pid: int | None) -> None:
         self.tree = SceneNode()
         self.browsers: set[BrowserSocket] = set()
+        self._live_nodes: dict[bytes, tuple[NodePath, SceneNode]] = {}
         self._parent_pid = parent_pid
         sockets = tornado.netutil.bind_sockets(web_port, address=LOOPBACK, family=socket.AF_INET)
         self.web_port: int = sockets[0].getsockname()[1]
@@ -310,24 +329,45 @@ class Bridge:
         return [b"error: unknown request " + kind[:40]]
 
     def _on_batch(self, frames: list[bytes]) -> None:
-        if len(frames) % 3:
-            return
+        if len(frames) != 2:
+            raise ValueError("a batch is [index, data]")
+        index, data = frames
+        fields = index.split(b"\0") if index else []
+        if len(fields) % 3:
+            raise ValueError("a batch index holds type, path and length per command")
         paths: list[NodePath] = []
-        messages: list[Message] = []
-        for i in range(0, len(frames), 3):
-            kind, path, data = frames[i : i + 3]
-            if kind not in COMMANDS:
-                continue
-            node_path = split_path(path)
-            messages.append(self._apply(kind, node_path, data))
+        commands: list[bytes] = []
+        view = memoryview(data)
+        offset = 0
+        for i in range(0, len(fields), 3):
+            kind, path, size = fields[i], fields[i + 1], int(fields[i + 2])
+            if kind not in LIVE_COMMANDS:
+                raise ValueError(f"a batch cannot carry {kind.decode(errors='replace')}")
+            command = bytes(view[offset : offset + size])
+            offset += size
+            node_path, node = self._live_node(path)
+            if kind == b"set_transform":
+                node.transform = command
+            else:
+                node.properties[str(umsgpack.unpackb(command).get("property"))] = command
             paths.append(node_path)
+            commands.append(command)
         for browser in list(self.browsers):
-            browser.write_latest(paths, messages)
+            browser.write_latest(paths, commands)
+
+    def _live_node(self, path: bytes) -> tuple[NodePath, SceneNode]:
+        """The node a live update names, remembered: the same nodes come again and again."""
+        known = self._live_nodes.get(path)
+        if known is None:
+            node_path = split_path(path)
+            known = self._live_nodes[path] = (node_path, self.tree.find(node_path))
+        return known
 
     def _apply(self, kind: bytes, path: NodePath, data: bytes) -> Message:
         """Keep the command in the tree; returns what to send to browsers."""
         if kind == b"delete":
             self.tree.delete(path)
+            self._live_nodes.clear()
             return data
         node = self.tree.find(path)
         if kind == b"set_object":

@@ -121,9 +121,10 @@ class UpdatePublisher:
         with self._condition:
             batch, self._pending = self._pending, {}
             self._sending = True
-        frames = [b"batch"]
+        index: list[bytes] = []
         for (kind, path, _), data in batch.items():
-            frames += (kind, path, data)
+            index += (kind, path, b"%d" % len(data))
+        frames = [b"batch", b"\0".join(index), b"".join(batch.values())]
         go_on, sent = True, False
         try:
             connection.request(frames)

@@ -1,4 +1,4 @@
-// armfleet: parse each mesh file once per page.
+// armfleet: unroll batched live updates, and parse each mesh file once per page.
 //
 // Every arm of a fleet loads the same mesh files (a Panda's are ~10 MB of
 // Collada text). The server tags a mesh-file object with a digest
@@ -6,6 +6,12 @@
 // the same digest come without it and get a clone of the first one parsed,
 // which shares its geometry and materials.
 function armfleetCacheMeshes(viewer) {
+  // Live updates come batched: one message holding an array of commands.
+  const handle = viewer.handle_command.bind(viewer);
+  viewer.handle_command = function (command) {
+    if (Array.isArray(command)) command.forEach(handle);
+    else handle(command);
+  };
   const parsed = new Map();
   // While meshes arrive, drawing waits: a frame of software WebGL can take
   // longer than parsing a mesh, and would hold up every message behind it.
