@@ -6,8 +6,9 @@ controllers itself; it submits a function and waits on the returned future.
 
 from __future__ import annotations
 
+import contextlib
 import queue
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from typing import Any, TypeVar
 
@@ -30,6 +31,15 @@ class RequestQueue:
         future: Future[T] = Future()
         self._pending.put_nowait((function, future))
         return future
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Run no request inside this block (a bring-up that steps the world itself)."""
+        draining, self._draining = self._draining, True
+        try:
+            yield
+        finally:
+            self._draining = draining
 
     def drain(self) -> int:
         """Run every queued function, in order, in the calling thread; return how many ran.

@@ -209,7 +209,8 @@ class World:
         self._arms[name] = arm
         self._contacts.add_arm(name, arm.body)
         try:
-            bring_up(self, arm, started, on_ready=self._show)
+            with self._requests.held():  # nobody else's request inside this bring-up
+                bring_up(self, arm, started, on_ready=self._show)
         except BaseException:
             self._remove(arm)
             raise

@@ -7,6 +7,7 @@ their arguments and exit) and checked one by one.
 from __future__ import annotations
 
 import argparse
+import os
 import queue
 import re
 import signal
@@ -57,6 +58,7 @@ def start(args: list[str], cwd: Path) -> subprocess.Popen[str]:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        env=os.environ | {"XDG_RUNTIME_DIR": str(cwd)},  # never join the developer's world
     )
 
 
