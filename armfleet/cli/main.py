@@ -17,6 +17,7 @@ from armfleet.cli import (
     recording_info_command,
     remove_command,
     replay_command,
+    reset_command,
     spawn_command,
     topic_command,
     world_commands,
@@ -40,6 +41,7 @@ def build_parser() -> OneLineParser:
     arms_command.add_parser(subparsers)
     move_command.add_parser(subparsers)
     remove_command.add_parser(subparsers)
+    reset_command.add_parser(subparsers)
     topic_command.add_parser(subparsers)
     world_commands.add_parsers(subparsers)
     recording_info_command.extend_info_parser(subparsers.choices["info"])
