@@ -1,16 +1,21 @@
 """What the MeshCat viewer costs the simulation, and how fast a browser shows the scene.
 
-For 2 and 10 Pandas (a grid 1 m apart, random targets inside the joint
-limits) this runs the same workload flat out in two worlds of one process,
-one without and one with a viewer, alternating chunks of simulated time, and
-reports the real-time factor (simulated time / wall time) of each and their
-ratio. With Debian's Chromium at /usr/bin/chromium it also opens the live page
-headless and reports the time until every mesh of every arm is in the scene,
-and the real-time factor while that page is open (the browser then competes
-for the same CPU). Results go to ``benchmarks/results/viewer_cost.json``;
-screenshots to ``test-artifacts/``.
+For 2 and 10 Pandas (a grid 1 m apart, random targets near home inside the
+joint limits) this runs the same workload flat out in two worlds of one
+process, one without and one with a viewer, alternating runs, and reports:
 
-Run: ``python benchmarks/viewer_cost.py [--arms 2 10] [--chunk 1.0] [--repeats 5]``
+- the real-time factor (simulated time / wall time) of each and their ratio;
+- the CPU time spent per simulated second (this process with all its threads,
+  plus the viewer's server process), which other load on the machine
+  disturbs less than wall time;
+- with Debian's Chromium at /usr/bin/chromium: the time until a headless page
+  shows every mesh of every arm, and the real-time factor while that page is
+  open (with software WebGL the browser then competes for the same CPU).
+
+Results go to ``benchmarks/results/viewer_cost.json``; screenshots to
+``test-artifacts/``.
+
+Run: ``python benchmarks/viewer_cost.py [--arms 2 10] [--chunk 1.0] [--repeats 15]``
 """
 
 from __future__ import annotations
@@ -70,12 +75,20 @@ class Result:
 
     arms: int
     sim_s_per_run: float
+    runs: int
     rtf_viewer_off: float
     rtf_viewer_on: float
     ratio_on_off: float
+    #: CPU seconds per simulated second: simulation process (median of the runs)
+    #: plus the viewer's server (total over the runs).
+    cpu_s_per_sim_s_off: float
+    cpu_s_per_sim_s_on: float
+    cpu_overhead: float
     rtf_viewer_on_page_open: float | None
     full_scene_in_browser_s: float | None
     tick_not_due_us: float
+    #: One display update of all (moving) arms, sent and acknowledged [ms].
+    display_update_ms: float
     spawn_s_viewer_off: float
     spawn_s_viewer_on: float
 
@@ -108,16 +121,49 @@ def retarget(world: armfleet.World, rng: np.random.Generator) -> None:
             arm.move_to(home)
 
 
-def timed_run(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> float:
-    """Run ``sim_s`` simulated seconds flat out, re-targeting every 0.5 s; the wall time [s]."""
-    wall = 0.0
-    steps = round(sim_s / 0.5)
-    for _ in range(steps):
+@dataclass
+class Sample:
+    """One timed run: simulated, wall and CPU time [s]."""
+
+    sim_s: float
+    wall_s: float
+    cpu_s: float
+
+    @property
+    def rtf(self) -> float:
+        return self.sim_s / self.wall_s
+
+    @property
+    def cpu_per_sim_s(self) -> float:
+        return self.cpu_s / self.sim_s
+
+
+def server_cpu_s(world: armfleet.World) -> float:
+    """CPU time used so far by the world's viewer server process (0 without one) [s]."""
+    if world.viewer is None:
+        return 0.0
+    try:
+        fields = Path(f"/proc/{world.viewer.server_pid}/stat").read_text().rsplit(")", 1)[1]
+    except OSError:
+        return 0.0
+    user, system = fields.split()[11:13]
+    return (int(user) + int(system)) / os.sysconf("SC_CLK_TCK")
+
+
+def timed_run(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> Sample:
+    """Run ``sim_s`` simulated seconds flat out, re-targeting every 0.5 s.
+
+    CPU time counts this process, every thread (the server's is counted apart:
+    the kernel reports it in 10 ms ticks, too coarse for one run).
+    """
+    wall = cpu = 0.0
+    for _ in range(round(sim_s / 0.5)):
         retarget(world, rng)
-        started = time.perf_counter()
+        wall_0, cpu_0 = time.perf_counter(), time.process_time()
         world.run(0.5)
-        wall += time.perf_counter() - started
-    return wall
+        wall += time.perf_counter() - wall_0
+        cpu += time.process_time() - cpu_0
+    return Sample(sim_s, wall, cpu)
 
 
 def tick_cost_us(world: armfleet.World, calls: int = 200_000) -> float:
@@ -128,6 +174,25 @@ def tick_cost_us(world: armfleet.World, calls: int = 200_000) -> float:
     for _ in range(calls):
         viewer.tick(world)
     return (time.perf_counter() - started) / calls * 1e6
+
+
+def refresh_ms(world: armfleet.World, rng: np.random.Generator, count: int = 40) -> float:
+    """Median wall time of one display update of moving arms, sent and acknowledged [ms].
+
+    ``Viewer.refresh`` does what a due tick does (pose every arm that moved,
+    queue the batch) and then waits for the server's reply, so this bounds
+    the per-update cost from above.
+    """
+    viewer = world.viewer
+    assert viewer is not None
+    times = []
+    for _ in range(count):
+        retarget(world, rng)
+        world.run(0.05)
+        started = time.perf_counter()
+        viewer.refresh()
+        times.append(time.perf_counter() - started)
+    return statistics.median(times) * 1e3
 
 
 def open_page(world: armfleet.World, count: int, screenshot: Path) -> tuple[Any, Any, float]:
@@ -161,11 +226,14 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
         rng_off, rng_on = np.random.default_rng(count), np.random.default_rng(count)
         timed_run(off, rng_off, 1.0)  # warm-up: caches, allocations
         timed_run(on, rng_on, 1.0)
-        rtf_off, rtf_on = [], []
-        for _ in range(repeats):
-            rtf_off.append(chunk_s / timed_run(off, rng_off, chunk_s))
-            rtf_on.append(chunk_s / timed_run(on, rng_on, chunk_s))
+        samples_off, samples_on = [], []
+        server_0 = server_cpu_s(on)
+        for _ in range(repeats):  # alternate, so that load from elsewhere hits both
+            samples_off.append(timed_run(off, rng_off, chunk_s))
+            samples_on.append(timed_run(on, rng_on, chunk_s))
+        server_per_sim_s = (server_cpu_s(on) - server_0) / (repeats * chunk_s)
         tick_us = tick_cost_us(on)
+        update_ms = refresh_ms(on, rng_on)
         full_scene_s: float | None = None
         rtf_page: float | None = None
         if use_browser:
@@ -173,26 +241,35 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
             playwright, browser, full_scene_s = open_page(on, count, shot)
             try:
                 rtf_page = statistics.median(
-                    chunk_s / timed_run(on, rng_on, chunk_s) for _ in range(repeats)
+                    timed_run(on, rng_on, chunk_s).rtf for _ in range(repeats)
                 )
             finally:
                 browser.close()
                 playwright.stop()
             print(f"   browser: full scene after {full_scene_s:.1f} s; screenshot {shot}")
-        median_off, median_on = statistics.median(rtf_off), statistics.median(rtf_on)
+        median_off = statistics.median(x.rtf for x in samples_off)
+        median_on = statistics.median(x.rtf for x in samples_on)
+        cpu_off = statistics.median(x.cpu_per_sim_s for x in samples_off)
+        cpu_on = statistics.median(x.cpu_per_sim_s for x in samples_on) + server_per_sim_s
         result = Result(
             arms=count,
             sim_s_per_run=chunk_s,
+            runs=repeats,
             rtf_viewer_off=round(median_off, 3),
             rtf_viewer_on=round(median_on, 3),
             ratio_on_off=round(median_on / median_off, 3),
+            cpu_s_per_sim_s_off=round(cpu_off, 4),
+            cpu_s_per_sim_s_on=round(cpu_on, 4),
+            cpu_overhead=round(cpu_on / cpu_off - 1.0, 4),
             rtf_viewer_on_page_open=None if rtf_page is None else round(rtf_page, 3),
             full_scene_in_browser_s=None if full_scene_s is None else round(full_scene_s, 2),
             tick_not_due_us=round(tick_us, 3),
+            display_update_ms=round(update_ms, 3),
             spawn_s_viewer_off=round(spawn_off, 2),
             spawn_s_viewer_on=round(spawn_on, 2),
         )
-        print(f"   RTF off {rtf_off}\n   RTF on  {rtf_on}")
+        print(f"   RTF off {[round(x.rtf, 2) for x in samples_off]}")
+        print(f"   RTF on  {[round(x.rtf, 2) for x in samples_on]}")
         return result
     finally:
         off.close()
@@ -201,24 +278,27 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
 
 def print_table(results: list[Result]) -> None:
     header = (
-        f"{'arms':>4} | {'RTF off':>8} | {'RTF on':>8} | {'on/off':>6} | "
-        f"{'RTF on+page':>11} | {'full scene':>10} | {'tick':>8}"
+        f"{'arms':>4} | {'RTF off':>7} | {'RTF on':>7} | {'on/off':>6} | {'CPU/sim s off':>13} | "
+        f"{'CPU/sim s on':>12} | {'CPU +':>6} | {'RTF on+page':>11} | {'full scene':>10} | "
+        f"{'tick':>8} | {'update':>8}"
     )
     print("\n" + header + "\n" + "-" * len(header))
     for r in results:
         page = "-" if r.rtf_viewer_on_page_open is None else f"{r.rtf_viewer_on_page_open:.2f}"
         scene = "-" if r.full_scene_in_browser_s is None else f"{r.full_scene_in_browser_s:.1f} s"
         print(
-            f"{r.arms:>4} | {r.rtf_viewer_off:>8.2f} | {r.rtf_viewer_on:>8.2f} | "
-            f"{r.ratio_on_off:>6.3f} | {page:>11} | {scene:>10} | {r.tick_not_due_us:>5.2f} us"
+            f"{r.arms:>4} | {r.rtf_viewer_off:>7.2f} | {r.rtf_viewer_on:>7.2f} | "
+            f"{r.ratio_on_off:>6.3f} | {r.cpu_s_per_sim_s_off:>11.3f} s | "
+            f"{r.cpu_s_per_sim_s_on:>10.3f} s | {r.cpu_overhead:>+6.1%} | {page:>11} | "
+            f"{scene:>10} | {r.tick_not_due_us:>5.2f} us | {r.display_update_ms:>5.2f} ms"
         )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--arms", type=int, nargs="+", default=[2, 10])
-    parser.add_argument("--chunk", type=float, default=2.0, help="simulated s per timed run")
-    parser.add_argument("--repeats", type=int, default=5, help="timed runs per mode")
+    parser.add_argument("--chunk", type=float, default=1.0, help="simulated s per timed run")
+    parser.add_argument("--repeats", type=int, default=15, help="timed runs per mode")
     parser.add_argument("--no-browser", action="store_true", help="skip the headless page")
     args = parser.parse_args()
     logging.basicConfig(level=logging.WARNING)
@@ -229,7 +309,11 @@ def main() -> None:
     print_table(results)
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     report = {
-        "machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
+        "machine": {
+            "cpus": os.cpu_count(),
+            "python": platform.python_version(),
+            "load_average_1_5_15_min_at_end": [round(x, 2) for x in os.getloadavg()],
+        },
         "display_rate_hz": armfleet.viewer.DISPLAY_RATE_HZ,
         "results": [asdict(r) for r in results],
     }
