@@ -98,6 +98,13 @@ def test_importing_armfleet_loads_no_viewer_dependency() -> None:
     assert result.stdout.strip() == "[]"
 
 
+def test_public_names_resolve() -> None:
+    import armfleet.viewer
+
+    for name in armfleet.viewer.__all__:
+        assert getattr(armfleet.viewer, name) is not None, name
+
+
 # -- scene -----------------------------------------------------------------------------
 def test_each_arm_loads_once_under_its_own_node(viewed: armfleet.World) -> None:
     with SceneWatcher(viewer_of(viewed).port) as watcher:
@@ -317,6 +324,10 @@ def test_server_listens_on_loopback_only(viewed: armfleet.World) -> None:
     address = non_loopback_ipv4()
     if address is None:
         pytest.skip("this machine has no non-loopback IPv4 address to try")
+    with socket.socket() as everywhere:  # control: the address reaches a listening socket
+        everywhere.bind(("0.0.0.0", 0))
+        everywhere.listen()
+        socket.create_connection((address, everywhere.getsockname()[1]), timeout=2.0).close()
     for kind, port in ports.items():
         with pytest.raises(OSError):
             socket.create_connection((address, port), timeout=2.0).close()
