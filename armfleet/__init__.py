@@ -22,6 +22,14 @@ from armfleet.messages import (
     TFMessage,
     TransformStamped,
 )
+from armfleet.recording import (
+    Recorder,
+    Recording,
+    RecordingError,
+    open_recording,
+    plot_recording,
+    record,
+)
 from armfleet.remote import connect
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec import FleetSpec, SpecError, load_spec
@@ -39,6 +47,9 @@ __all__ = [
     "FleetSpec",
     "JointCommand",
     "JointState",
+    "Recorder",
+    "Recording",
+    "RecordingError",
     "SpawnPose",
     "SpecError",
     "TFMessage",
@@ -48,4 +59,7 @@ __all__ = [
     "connect",
     "launch",
     "load_spec",
+    "open_recording",
+    "plot_recording",
+    "record",
 ]

@@ -3,11 +3,16 @@
 Tolerances (issue #2): max |q_ref - q| during motion < 1e-3 rad; final error
 < 1e-4 rad 0.2 s after the reference ends; measured joint velocities never
 above the URDF limits; toby's joints move < 1e-5 rad.
+
+Each motion is recorded (MCAP); a failing test leaves the recording and its
+tracking plots in ``test-artifacts/<test id>/`` (see ``keep_on_failure``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,12 +24,22 @@ MAX_TRACKING_ERROR_RAD = 1e-3
 FINAL_ERROR_RAD = 1e-4
 SETTLE_S = 0.2
 BYSTANDER_MOTION_RAD = 1e-5
+#: What a failing test's recording holds: enough to plot and replay the motion.
+RECORDED_TOPICS = [
+    "/bringup",
+    "/tf_static",
+    *(f"/{arm}/{topic}" for arm in ("bob", "toby") for topic in ("joint_states", "status")),
+    "/bob/position_controller/state",
+    "/bob/position_controller/commands",
+]
 
 
 @dataclass
 class Recording:
     states: list[ControllerState] = field(default_factory=list)
     bystander: list[JointState] = field(default_factory=list)
+    #: The motion as an MCAP file, for a person to look at if a test fails.
+    mcap: Path | None = None
 
     def errors(self) -> np.ndarray:
         return np.array([s.reference_position - s.position for s in self.states])
@@ -38,33 +53,46 @@ def run_until_still(world: armfleet.World, arm: armfleet.Arm, limit_s: float = 1
 
 
 @pytest.fixture(scope="module", params=["panda", "ur5"])
-def tracked(request: pytest.FixtureRequest):
+def tracked(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory):
     """bob and toby of one model at (0,0) and (1,0); bob through three targets, one mid-motion."""
     model = request.param
     world = armfleet.World()
-    bob = world.spawn("bob", model=model, at=(0, 0))
-    toby = world.spawn("toby", model=model, at=(1, 0))
-    recording = Recording()
-    world.bus.subscribe("/bob/position_controller/state", recording.states.append)
-    world.bus.subscribe("/toby/joint_states", recording.bystander.append)
+    mcap = tmp_path_factory.mktemp("tracking") / f"tracking_{model}.mcap"
+    recording = Recording(mcap=mcap)
+    with armfleet.record(world, mcap, topics=RECORDED_TOPICS):
+        bob = world.spawn("bob", model=model, at=(0, 0))
+        toby = world.spawn("toby", model=model, at=(1, 0))
+        world.bus.subscribe("/bob/position_controller/state", recording.states.append)
+        world.bus.subscribe("/toby/joint_states", recording.bystander.append)
 
-    home = bob.positions
-    lower, upper = bob.joint_limits
-    targets = [home + 0.6, home - 0.5, home + 0.3]
-    for target in targets:
-        assert np.all((lower < target) & (target < upper)), "test targets must be reachable"
+        home = bob.positions
+        lower, upper = bob.joint_limits
+        targets = [home + 0.6, home - 0.5, home + 0.3]
+        for target in targets:
+            assert np.all((lower < target) & (target < upper)), "test targets must be reachable"
 
-    bob.move_to(targets[0])
-    run_until_still(world, bob)
-    bob.move_to(targets[1])
-    world.run(0.5)
-    assert bob.is_moving, "the third target must arrive mid-motion"
-    bob.move_to(targets[2])  # re-plan from the moving reference
-    run_until_still(world, bob)
-    motion_end = len(recording.states)
-    world.run(SETTLE_S)
+        bob.move_to(targets[0])
+        run_until_still(world, bob)
+        bob.move_to(targets[1])
+        world.run(0.5)
+        assert bob.is_moving, "the third target must arrive mid-motion"
+        bob.move_to(targets[2])  # re-plan from the moving reference
+        run_until_still(world, bob)
+        motion_end = len(recording.states)
+        world.run(SETTLE_S)
     yield model, world, bob, toby, recording, targets, motion_end
     world.close()
+
+
+@pytest.fixture(autouse=True)
+def keep_tracking_recording(
+    request: pytest.FixtureRequest, keep_on_failure: Callable[[Path], None]
+) -> None:
+    """A failing test on ``tracked`` leaves its recording and plots in test-artifacts/."""
+    if "tracked" in request.fixturenames:
+        recording = request.getfixturevalue("tracked")[4]
+        if recording.mcap is not None:
+            keep_on_failure(recording.mcap)
 
 
 def test_targets_span_at_least_one_radian_per_joint(tracked) -> None:
@@ -96,12 +124,17 @@ def test_velocities_within_urdf_limits(tracked) -> None:
 
 
 @pytest.mark.parametrize("model", ["panda", "ur5"])
-def test_velocity_limit_holds_on_a_long_move(model: str) -> None:
+def test_velocity_limit_holds_on_a_long_move(
+    model: str, tmp_path: Path, keep_on_failure: Callable[[Path], None]
+) -> None:
     """A 2.5 rad move of every joint is long enough to cruise at the velocity limit.
 
     The arm stands on a 1.2 m pedestal so that such a sweep clears the floor.
     """
-    with armfleet.World() as world:
+    mcap = tmp_path / f"long_move_{model}.mcap"
+    keep_on_failure(mcap)
+    topics = ["/bringup", "/tf_static", "/bob/joint_states", "/bob/position_controller/state"]
+    with armfleet.World() as world, armfleet.record(world, mcap, topics=topics):
         arm = world.spawn("bob", model=model, at=(0, 0, 1.2))
         lower, upper = arm.joint_limits
         start = arm.positions

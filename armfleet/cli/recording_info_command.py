@@ -76,7 +76,7 @@ def describe(recording: Recording) -> str:
     for topic in sorted(recording.topics):
         info = recording.topics[topic]
         rate = (
-            f"{info.message_count / duration:.1f} Hz"
+            f"{(info.message_count - 1) / duration:.1f} Hz"
             if duration and info.message_count > 1
             else "-"
         )

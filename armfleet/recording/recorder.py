@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import datetime
 import fnmatch
+import functools
 import logging
 import re
 import weakref
@@ -32,6 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from armfleet.bringup import BRINGUP_TOPIC
 from armfleet.errors import WorldClosed
 from armfleet.messages import ArmStatus, BringupEvent, BringupStage
 from armfleet.recording.arm_record import (
@@ -50,7 +52,7 @@ from armfleet.recording.spec_snapshot import spec_text
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
-    from armfleet.bus import Tap
+    from armfleet.bus import Subscription, Tap
     from armfleet.spec import FleetSpec
     from armfleet.world import World
 
@@ -80,8 +82,10 @@ class Recorder:
         world: the world to record.
         path: the ``.mcap`` file to write (replaced if it exists).
         spec: the launch spec of the run, stored in the file.
-        topics: glob patterns (``fnmatch``) of the topics to record, e.g.
-            ``["/bob/*", "/tf_static"]``; every topic if None.
+        topics: the topics to record, as names or glob patterns (``fnmatch``), e.g.
+            ``["/bob/*", "/tf_static"]``; every topic if None. With names only, the
+            recorder subscribes to just those: topics computed only for listeners
+            (``/tf``, ``/<arm>/position_controller/state``) then cost nothing unless named.
         chunk_bytes: uncompressed size of the file's chunks [bytes].
 
     Raises:
@@ -105,7 +109,7 @@ class Recorder:
         self._patterns = None if topics is None else tuple(topics)
         self._chunk_bytes = chunk_bytes
         self._sink: McapSink | None = None
-        self._tap: Tap | None = None
+        self._listening: list[Tap | Subscription] = []
         self._finalizer: weakref.finalize[Any, Any] | None = None
         self._channels: dict[str, _Channel | None] = {}
         self._arms: dict[str, Arm] = {}
@@ -166,22 +170,36 @@ class Recorder:
             sink.attach(SPEC_ATTACHMENT, SPEC_MEDIA_TYPE, spec_text(self._spec).encode(), now)
         for arm in world.arms.values():
             self._add_arm(arm)
-        bus = world.bus
         self._open_advertised()
-        for topic in bus.topics:
-            for message in bus.latched(topic):
-                self._on_message(topic, message)
-        self._tap = bus.subscribe_all(self._on_message)
+        self._listen()
         return self
+
+    def _listen(self) -> None:
+        bus = self._world.bus
+        exact = self._patterns is not None and not any(map(_is_pattern, self._patterns))
+        if not exact:
+            for topic in bus.topics:
+                for message in bus.latched(topic):
+                    self._on_message(topic, message)
+            self._listening.append(bus.subscribe_all(self._on_message))
+            return
+        # Named topics only: subscribe to just those, so that the topics computed only
+        # for listeners (/tf, controller states) cost nothing unless named. Latched
+        # messages come with the subscription.
+        assert self._patterns is not None
+        for topic in dict.fromkeys(self._patterns):
+            self._listening.append(bus.subscribe(topic, functools.partial(self._on_message, topic)))
+        if BRINGUP_TOPIC not in self._patterns:  # still notice the arms that come
+            self._listening.append(bus.subscribe(BRINGUP_TOPIC, self._watch))
 
     def stop(self) -> None:
         """Stop recording and complete the file (summary, index); idempotent."""
         sink = self._sink
         if sink is None or sink.closed:
             return
-        if self._tap is not None:
-            self._tap.cancel()
-            self._tap = None
+        for listening in self._listening:
+            listening.cancel()
+        self._listening.clear()
         try:
             self._check_arms()
             self._open_advertised()
@@ -290,6 +308,10 @@ class Recorder:
 
 
 _UNSEEN: Any = object()
+
+
+def _is_pattern(topic: str) -> bool:
+    return any(character in topic for character in "*?[")
 
 
 def with_file_uris(urdf: str) -> str:

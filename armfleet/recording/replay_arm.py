@@ -23,7 +23,7 @@ from armfleet.bus import Bus
 from armfleet.description import ArmDescription, ModelLibrary
 from armfleet.errors import ArmfleetError
 from armfleet.kinematics import ArmKinematics
-from armfleet.messages import FloatArray
+from armfleet.messages import FloatArray, Positions
 from armfleet.recording.arm_record import ArmRecord
 from armfleet.recording.errors import RecordingError
 
@@ -110,7 +110,7 @@ class ReplayArm:
         """Every movable joint, in model order."""
         return self.kinematics.joint_names
 
-    def set_positions(self, names: Sequence[str], positions: Sequence[float]) -> None:
+    def set_positions(self, names: Sequence[str], positions: Positions) -> None:
         """Take the joint positions of a ``joint_states`` message (by name; others stay)."""
         key = tuple(names)
         order = self._order.get(key)
