@@ -32,6 +32,12 @@ Poses = npt.NDArray[np.float64]
 class ArmVisual:
     """Loads one arm into a shared ``meshcat.Visualizer`` and makes its live updates.
 
+    What it reads from ``arm`` (a recording's replay passes look-alikes):
+    ``name``, ``namespace``, ``description`` (``urdf``, ``prefix``, ``base_link``,
+    ``tool0``), ``kinematics`` (``model``, ``arm_indices``), ``body.position``,
+    ``is_moving`` and ``position_controller.arm.bus``, whose
+    ``/<name>/position_controller/commands`` give the motion targets.
+
     Args:
         arm: a ready arm.
         visualizer: the viewer's ``meshcat.Visualizer`` (root ``/meshcat``).
