@@ -219,35 +219,33 @@ class TFMessageEncoder:
 
     def __call__(self, message: TFMessage) -> bytes:
         transforms = message.transforms
-        if not transforms:
-            return b'{"transforms":[]}'
-        matrices = np.array([t.matrix for t in transforms], dtype=float)
-        if matrices.shape[1:] != (4, 4) or not np.isfinite(matrices).all():
-            return dumps(
-                {
-                    "transforms": [
-                        self._plain(t, m) for t, m in zip(transforms, matrices, strict=True)
-                    ]
-                }
-            )
-        key = tuple((t.frame_id, t.child_frame_id) for t in transforms)
+        key = tuple([(t.frame_id, t.child_frame_id) for t in transforms])
         template = self._templates.get(key)
         if template is None:
             parts = ",".join(_transform_template(parent, child) for parent, child in key)
             template = '{"transforms":[' + parts + "]}"
             self._templates[key] = template
         values: list[float | int] = []
-        for transform, row in zip(
-            transforms, matrices.reshape(len(transforms), 16).tolist(), strict=True
-        ):
-            sec, nanosec = _stamp(transform.stamp)
+        stamp, sec, nanosec = None, 0, 0
+        for transform in transforms:
+            row = np.asarray(transform.matrix, dtype=float).ravel().tolist()
+            if len(row) != 16 or not math.isfinite(sum(row)):
+                return self._slow(message)
+            if transform.stamp != stamp:  # the transforms of a message share one, mostly
+                stamp = transform.stamp
+                sec, nanosec = _stamp(stamp)
             values += (sec, nanosec, nanosec, row[3], row[7], row[11])
             values += rotation_to_quaternion(row)
         return (template % tuple(values)).encode()
 
+    def _slow(self, message: TFMessage) -> bytes:
+        return dumps({"transforms": [self._plain(t, t.matrix) for t in message.transforms]})
+
     @staticmethod
     def _plain(transform: Any, matrix: Any) -> dict[str, Any]:
         row = np.asarray(matrix, dtype=float).ravel().tolist()
+        if len(row) != 16:
+            row = [math.nan] * 16
         rotation = rotation_to_quaternion(row) if np.isfinite(row).all() else (None,) * 4
         translation = finite_list([row[3], row[7], row[11]])
         return {
