@@ -133,7 +133,7 @@ def test_a_faulty_controller_puts_only_its_arm_in_error(pair: armfleet.World, fa
             raise RuntimeError("solver diverged")
 
         original = bob.kinematics.inverse_dynamics
-        bob.kinematics.inverse_dynamics = broken  # type: ignore[method-assign]
+        bob.kinematics.inverse_dynamics = broken  # type: ignore[method-assign,assignment]
     else:
         bob.position_controller._kp = float("nan")
     bob.move_to(bob.positions + 0.2)

@@ -32,9 +32,10 @@ def test_shipped_spec_validates_and_runs(path: Path) -> None:
     world = launch(spec, viewer=False)
     try:
         assert list(world.arms) == [arm.name for arm in spec.arms]
-        for arm in spec.arms:
-            expected = arm.pose.matrix()
-            assert np.abs(world.tf.lookup("world", f"{arm.name}_base_link") - expected).max() < 1e-9
+        for arm_spec in spec.arms:
+            expected = arm_spec.pose.matrix()
+            base = world.tf.lookup("world", f"{arm_spec.name}_base_link")
+            assert np.abs(base - expected).max() < 1e-9
         world.run(0.5)
         for arm in world.arms.values():
             assert arm.position_controller.is_holding, arm.name
