@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import base64
+import dataclasses
 import json
 import re
 import time
@@ -16,10 +17,11 @@ import umsgpack  # type: ignore[import-untyped]
 
 import armfleet
 from armfleet.cli.main import main
+from armfleet.description import ModelLibrary
 from armfleet.messages import JointState
 from armfleet.recording import ReplayPlayer, open_recording, replay_events
 from armfleet.recording.replay import ReplayClock
-from armfleet.recording.replay_arm import ReplayArm
+from armfleet.recording.replay_arm import ReplayArm, usable_urdf
 from armfleet.recording.replay_stream import ArmAppeared, JointPositions, TargetSent
 from tests.conftest import RecordedRun
 
@@ -179,3 +181,43 @@ def test_replay_needs_armfleet_arms(tmp_path: Path) -> None:
     with pytest.raises(armfleet.RecordingError, match="no armfleet arm to replay"):
         ReplayPlayer(open_recording(path), FakeViewer())
     assert ReplayClock().time == 0.0
+
+
+def elsewhere(urdf: str) -> str:
+    """The URDF as recorded on another machine: its mesh paths are not here."""
+    return urdf.replace('filename="/', 'filename="/another/machine/')
+
+
+def test_an_arm_recorded_elsewhere_is_rebuilt_from_the_local_model(
+    recorded_run: RecordedRun,
+) -> None:
+    bob = open_recording(recorded_run.path).arm("bob")
+    moved = dataclasses.replace(bob, urdf=elsewhere(bob.urdf))
+    assert usable_urdf(moved) == ModelLibrary().expand("panda", "bob_", bob.pose).urdf
+    unknown = dataclasses.replace(moved, model="robot9000")
+    with pytest.raises(armfleet.RecordingError, match=r"not on this machine.*'robot9000'"):
+        usable_urdf(unknown)
+
+
+def test_an_arm_that_cannot_be_rebuilt_is_skipped(recorded_run: RecordedRun) -> None:
+    recording = open_recording(recorded_run.path)
+    recording.arms = tuple(
+        dataclasses.replace(arm, model="robot9000", urdf=elsewhere(arm.urdf))
+        if arm.name == "toby"
+        else arm
+        for arm in recording.arms
+    )
+    viewer = FakeViewer()
+    player = ReplayPlayer(recording, viewer)
+    player.play(speed=None)
+    assert [name for _, name in viewer.added] == ["bob"]
+    assert "robot9000" in player.skipped["toby"]
+
+
+def test_replay_needs_joint_states(tmp_path: Path) -> None:
+    path = tmp_path / "no_states.mcap"
+    with armfleet.World() as world:
+        world.spawn("bob")
+        armfleet.record(world, path, topics=["/tf_static"]).stop()
+    with pytest.raises(armfleet.RecordingError, match="no /<arm>/joint_states messages"):
+        ReplayPlayer(open_recording(path), FakeViewer())

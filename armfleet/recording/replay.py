@@ -12,6 +12,7 @@ The viewer takes arms and ticks as a world gives them (``add_arm(arm)``,
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -19,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Protocol, cast
 
 from armfleet.bus import Bus
 from armfleet.description import ModelLibrary
+from armfleet.errors import ArmfleetError
 from armfleet.messages import JointCommand
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.reader import Recording
@@ -36,6 +38,8 @@ if TYPE_CHECKING:
     from armfleet.arm import Arm
     from armfleet.viewer import Viewer
     from armfleet.world import World
+
+logger = logging.getLogger("armfleet")
 
 #: Joint states per second and arm taken from the recording (the viewer shows 30).
 REPLAY_RATE_HZ = 60.0
@@ -79,6 +83,12 @@ class ReplayPlayer:
     ) -> None:
         if not recording.arms:
             raise RecordingError(f"{recording.path} holds no armfleet arm to replay")
+        states = [recording.topics.get(f"/{name}/joint_states") for name in recording.arm_names]
+        if not any(info is not None and info.message_count for info in states):
+            raise RecordingError(
+                f"{recording.path} has no /<arm>/joint_states messages to replay "
+                "(recorded with a topic filter?)"
+            )
         self._recording = recording
         self._target = target
         self._rate_hz = rate_hz
@@ -88,6 +98,8 @@ class ReplayPlayer:
         #: Arms on show, by name.
         self.arms: dict[str, ReplayArm] = {}
         self._waiting: dict[str, ReplayArm] = {}  # appeared, shown at their first joint state
+        #: Arms that could not be rebuilt here, and why.
+        self.skipped: dict[str, str] = {}
 
     def play(
         self,
@@ -127,7 +139,13 @@ class ReplayPlayer:
                 self._target.add_arm(cast("Arm", arm))
         elif isinstance(event, ArmAppeared):
             self._remove(event.arm.name)
-            self._waiting[event.arm.name] = ReplayArm(event.arm, self._bus, self._models)
+            try:
+                arm = ReplayArm(event.arm, self._bus, self._models)
+            except ArmfleetError as exc:  # show the others
+                logger.warning("replay: %s", exc)
+                self.skipped[event.arm.name] = str(exc)
+                return
+            self._waiting[event.arm.name] = arm
         elif isinstance(event, ArmRemoved):
             self._remove(event.name)
         elif isinstance(event, TargetSent):
