@@ -410,3 +410,14 @@ def test_bad_files_to_read(tmp_path: Path) -> None:
         open_recording(tmp_path / "empty.mcap")
     with pytest.raises(armfleet.RecordingError, match="directory"):
         open_recording(tmp_path)
+
+
+def test_the_recorded_spec_launches_the_same_arms(
+    recorded_run: RecordedRun, tmp_path: Path
+) -> None:
+    text = open_recording(recorded_run.path).spec_text
+    assert text is not None
+    (tmp_path / "again.yaml").write_text(text)
+    again = armfleet.load_spec(tmp_path / "again.yaml")
+    assert again.arms == recorded_run.spec.arms
+    assert again.world == recorded_run.spec.world
