@@ -111,6 +111,12 @@ class ArmKinematics:
         """4x4 world pose of ``frame`` at the configuration of the last :meth:`update`."""
         return np.array(self.data.oMf[self._frame_ids[frame]].homogeneous)
 
+    def relative_pose(self, parent: str, child: str) -> FloatArray:
+        """4x4 pose of ``child`` in ``parent`` at the configuration of the last :meth:`update`."""
+        placements = self.data.oMf
+        relative = placements[self._frame_ids[parent]].actInv(placements[self._frame_ids[child]])
+        return np.array(relative.homogeneous)
+
     def inverse_dynamics(self, q: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
         """Joint torques for acceleration ``a``: RNEA plus the URDF viscous damping.
 

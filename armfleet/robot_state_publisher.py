@@ -44,12 +44,7 @@ class RobotStatePublisher:
         self._subscription: Subscription = bus.subscribe(f"/{arm}/joint_states", self._on_state)
 
     def _transform(self, stamp: float, parent: str, child: str) -> TransformStamped:
-        kinematics = self._kinematics
-        matrix = np.asarray(
-            np.linalg.solve(kinematics.world_pose(parent), kinematics.world_pose(child)),
-            dtype=np.float64,
-        )
-        return TransformStamped(stamp, parent, child, matrix)
+        return TransformStamped(stamp, parent, child, self._kinematics.relative_pose(parent, child))
 
     def _on_state(self, state: JointState) -> None:
         if not self._bus.has_subscribers(TF_TOPIC):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Future
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
@@ -37,6 +37,8 @@ from armfleet.spawn_pose import SpawnPose
 from armfleet.tf_tree import TfTree
 
 if TYPE_CHECKING:
+    from armfleet.recording import Recorder
+    from armfleet.spec import FleetSpec
     from armfleet.viewer import Viewer
 
 logger = logging.getLogger("armfleet")
@@ -142,6 +144,22 @@ class World:
         """
         self._check_open()
         return self._requests.submit(function)
+
+    def record(
+        self,
+        path: str | Path,
+        *,
+        spec: FleetSpec | None = None,
+        topics: Iterable[str] | None = None,
+    ) -> Recorder:
+        """Record every topic (or only ``topics``) to the MCAP file ``path``.
+
+        Returns the running :class:`armfleet.Recorder`: stop it, or use it in a
+        ``with`` block. ``spec`` is attached to the file when given.
+        """
+        from armfleet.recording import record
+
+        return record(self, path, spec=spec, topics=topics)
 
     def process_requests(self) -> int:
         """Run the submitted requests now (the stepping thread calls this; also when paused)."""

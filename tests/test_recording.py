@@ -421,3 +421,17 @@ def test_the_recorded_spec_launches_the_same_arms(
     again = armfleet.load_spec(tmp_path / "again.yaml")
     assert again.arms == recorded_run.spec.arms
     assert again.world == recorded_run.spec.world
+
+
+def test_world_record_is_the_same_recorder(tmp_path: Path) -> None:
+    path = tmp_path / "world.mcap"
+    with armfleet.World() as world:
+        bob = world.spawn("bob")
+        with world.record(path):
+            bob.move_to(bob.positions + 0.1)
+            world.run(0.2)
+    recording = armfleet.open_recording(path)
+    assert recording.arm_names == ("bob",)
+    assert 0.19 <= recording.duration_s <= 0.21
+    counts = {m.topic for m in recording.messages(["/bob/joint_states"])}
+    assert counts == {"/bob/joint_states"}
