@@ -3,10 +3,12 @@
 :func:`start_viewer` starts it (``World(viewer=True)`` does); the world calls
 :meth:`Viewer.add_arm` when an arm is ready and :meth:`Viewer.tick` after
 every physics step. A tick costs next to nothing unless a display update is
-due (~30 Hz of wall time) or a replay frame (30 Hz of simulated time); the
-updates go to the server from a background thread, so neither the server nor
-a browser can slow the simulation down. A viewer that fails (its server died
-or hangs) stops itself; the simulation goes on and :attr:`Viewer.error` says why.
+due (~30 Hz of wall time) or a replay frame (30 Hz of simulated time). An
+update is sent without waiting for anything (:mod:`armfleet.viewer.live_link`),
+so neither the server nor a browser can slow the simulation down; once the
+simulation pauses, a background thread sends the poses it came to rest in. A
+viewer that fails (its server died or hangs) stops itself; the simulation goes
+on and :attr:`Viewer.error` says why.
 
 Only the standard library and numpy are imported with this module: MeshCat,
 Pinocchio's visualizer, ZMQ and tornado load when a viewer starts.
@@ -22,14 +24,15 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from armfleet.viewer.errors import ViewerError, ViewerTimeout
+from armfleet.viewer.errors import ViewerError
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
     from armfleet.viewer.arm_visual import ArmVisual
     from armfleet.viewer.commands import Updates
     from armfleet.viewer.connection import BridgeConnection
-    from armfleet.viewer.publisher import UpdatePublisher
+    from armfleet.viewer.idle_refresher import IdleRefresher
+    from armfleet.viewer.live_link import LiveLink
     from armfleet.viewer.recorder import Recorder
     from armfleet.viewer.scene import Stage
     from armfleet.viewer.server import ViewerServer
@@ -39,6 +42,10 @@ logger = logging.getLogger("armfleet")
 
 #: Live updates per second of wall time.
 DISPLAY_RATE_HZ = 30.0
+#: Time without display updates after which the resting poses are sent [s].
+PAUSE_S = 0.1
+#: Time live updates may go unanswered before the viewer checks its server [s].
+STALL_TIMEOUT_S = 5.0
 #: Time a save may wait for the server's scene [s].
 SCENE_TIMEOUT_S = 60.0
 
@@ -99,7 +106,8 @@ class Viewer:
             warnings.simplefilter("ignore", DeprecationWarning)
             import meshcat
 
-        from armfleet.viewer.publisher import UpdatePublisher
+        from armfleet.viewer.idle_refresher import IdleRefresher
+        from armfleet.viewer.live_link import LiveLink
         from armfleet.viewer.recorder import Recorder
         from armfleet.viewer.scene import Stage
         from armfleet.viewer.server import ViewerServer
@@ -107,12 +115,16 @@ class Viewer:
         self._server: ViewerServer = ViewerServer.start(port)
         self._context: Any = zmq.Context()
         self._connection: BridgeConnection | None = None
-        self._publisher: UpdatePublisher | None = None
+        self._link: LiveLink | None = None
+        self._refresher: IdleRefresher | None = None
         self._visuals: dict[str, ArmVisual] = {}
         self._recorder: Recorder = Recorder()
         self._lock = threading.RLock()
         self._period_s = 1.0 / display_rate_hz
         self._next_display_s = 0.0
+        self._last_display_s = 0.0
+        self._refresher_awake = False
+        self._stall_reported = False
         self._show_frames = show_frames
         self._show_targets = show_targets
         self._error: str | None = None
@@ -124,9 +136,8 @@ class Viewer:
             self._visualizer: Any = meshcat.Visualizer(window=self._connection)
             self._stage: Stage = Stage(self._visualizer)
             self._stage.frame([])
-            self._publisher = UpdatePublisher(
-                self._connect, self._on_publish_error, 2 * self._period_s, self._refresh_updates
-            )
+            self._link = LiveLink(self._context, self._server.zmq_url)
+            self._refresher = IdleRefresher(PAUSE_S, self._refresh_if_paused)
         except BaseException:
             self.close()
             raise
@@ -154,8 +165,8 @@ class Viewer:
 
     @property
     def batches_sent(self) -> int:
-        """Live updates the server has received so far (one request each)."""
-        return 0 if self._publisher is None else self._publisher.batches_sent
+        """Batches of live updates the server has acknowledged so far."""
+        return 0 if self._link is None else self._link.batches_answered
 
     @property
     def server_pid(self) -> int:
@@ -197,10 +208,7 @@ class Viewer:
                 self._visuals[arm.name] = visual
                 self._recorder.add(arm.name)
                 self._frame_camera()
-                first: Updates = {}
-                visual.collect(first)
-            if self._publisher is not None:
-                self._publisher.offer(first)
+                self._send_poses()  # at once: the simulation may not step again
         except ViewerError as exc:
             self._fail(str(exc))
         except (RuntimeError, ValueError, OSError) as exc:  # Pinocchio/MeshCat loading
@@ -211,18 +219,19 @@ class Viewer:
         with self._lock:
             visual = self._visuals.pop(name, None)
             self._recorder.remove(name)
-        if visual is None:
-            return
-        visual.close()
-        if not self._live or self._publisher is None:
-            return
-        self._publisher.discard(visual.node)
-        try:
-            with self._lock:
+            if visual is None:
+                return
+            visual.close()
+            if not self._live or self._link is None:
+                return
+            try:
+                # Updates of the arm still on their way must not come after the delete.
+                self._link.discard(visual.node)
+                self._link.wait(STALL_TIMEOUT_S)
                 self._visualizer[f"armfleet/{name}"].delete()
                 self._frame_camera()
-        except ViewerError as exc:
-            self._fail(str(exc))
+            except ViewerError as exc:
+                self._fail(str(exc))
 
     def show_frames(self, visible: bool = True) -> None:
         """Show or hide every arm's ``base_link`` and ``tool0`` frames."""
@@ -257,39 +266,69 @@ class Viewer:
     def refresh(self, timeout_s: float = 5.0) -> bool:
         """Send the current pose of every arm now and wait until the server has it.
 
-        The viewer also does this by itself once the simulation pauses.
+        The viewer also sends the poses by itself once the simulation pauses.
 
         Returns:
-            Whether the server got it within ``timeout_s``.
+            Whether the server got them within ``timeout_s``.
         """
-        if not self._live or self._publisher is None:
+        if not self._live or self._link is None:
             return False
-        self._publisher.offer(self._refresh_updates())
-        return self._publisher.flush(timeout_s)
+        with self._lock:
+            try:
+                self._send_poses()
+                return self._link.wait(timeout_s)
+            except ViewerError as exc:
+                self._fail(str(exc))
+                return False
 
     def _record(self, time_s: float) -> None:
         positions = {name: visual.arm.body.position for name, visual in self._visuals.items()}
         self._recorder.record(time_s, positions)
 
     def _display(self) -> None:
-        self._next_display_s = time.perf_counter() + self._period_s
-        updates = self._refresh_updates()
-        if updates and self._publisher is not None:
-            self._publisher.offer(updates)
-
-    def _refresh_updates(self) -> Updates:
-        updates: Updates = {}
+        now = time.perf_counter()
+        self._next_display_s = now + self._period_s
         with self._lock:
-            for visual in self._visuals.values():
-                visual.collect(updates)
-        return updates
+            self._last_display_s = now
+            try:
+                self._send_poses()
+            except ViewerError as exc:
+                self._fail(str(exc))
+                return
+            if not self._refresher_awake and self._refresher is not None:
+                self._refresher_awake = True
+                self._refresher.wake()
 
-    def _on_publish_error(self, error: ViewerError) -> bool:
-        if isinstance(error, ViewerTimeout) and self._server.running:
-            logger.warning("viewer: %s; frames are dropped until it answers", error)
+    def _refresh_if_paused(self) -> bool:
+        """The refresher's check: once display updates stopped, send the resting poses."""
+        with self._lock:
+            if not self._live:
+                return True
+            if time.perf_counter() - self._last_display_s < PAUSE_S:
+                return False
+            self._refresher_awake = False
+            try:
+                self._send_poses()
+            except ViewerError as exc:
+                self._fail(str(exc))
             return True
-        self._fail(str(error))
-        return False
+
+    def _send_poses(self) -> None:
+        """Offer what changed to the link (caller holds the lock); checks a stalled server."""
+        assert self._link is not None
+        updates: Updates = {}
+        for visual in self._visuals.values():
+            visual.collect(updates)
+        self._link.offer(updates)
+        stalled_s = self._link.stalled_s
+        if stalled_s > STALL_TIMEOUT_S:
+            if not self._server.running:
+                raise ViewerError("the viewer server is gone")
+            if not self._stall_reported:
+                self._stall_reported = True
+                logger.warning("viewer: no answer for %.0f s; frames are dropped", stalled_s)
+        else:
+            self._stall_reported = False
 
     def _fail(self, reason: str) -> None:
         if self._live:
@@ -347,10 +386,13 @@ class Viewer:
         self._closed = True
         self._live = False
         try:
-            if self._publisher is not None:
-                self._publisher.stop()
-            for visual in self._visuals.values():
-                visual.close()
+            if self._refresher is not None:
+                self._refresher.stop()
+            with self._lock:
+                for visual in self._visuals.values():
+                    visual.close()
+                if self._link is not None:
+                    self._link.close()
             if self._connection is not None:
                 self._connection.close()
             self._context.destroy(linger=0)
