@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-import umsgpack  # type: ignore[import-untyped]
+import umsgpack  # type: ignore[import-untyped, unused-ignore]
 from tornado.websocket import websocket_connect
 
 import armfleet

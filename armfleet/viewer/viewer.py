@@ -187,11 +187,6 @@ class Viewer:
     def closed(self) -> bool:
         return self._closed
 
-    def mesh_count(self, name: str) -> int:
-        """Number of visual meshes of arm ``name`` in the scene."""
-        visual = self._visuals.get(name)
-        return 0 if visual is None else len(visual.geometry_paths)
-
     # -- arms ---------------------------------------------------------------------------
     def add_arm(self, arm: Arm) -> None:
         """Load ``arm``'s meshes under ``/meshcat/armfleet/<name>`` and follow it.
