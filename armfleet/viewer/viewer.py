@@ -351,12 +351,12 @@ class Viewer:
         if not self._live or self._connection is None:
             raise ViewerError(f"the viewer is not running ({self._error or 'closed'})")
         target = Path(path)
-        try:
-            scene = self._connection.request([b"scene"], SCENE_TIMEOUT_S)[1:]
-        except ViewerError as exc:
-            self._fail(str(exc))
-            raise
-        with self._lock:
+        with self._lock:  # one thread at a time on the connection
+            try:
+                scene = self._connection.request([b"scene"], SCENE_TIMEOUT_S)[1:]
+            except ViewerError as exc:
+                self._fail(str(exc))
+                raise
             tracks = self._recorder.tracks
             arms = [
                 RecordedArm(visual, Track(tracks[name].first_frame, list(tracks[name].positions)))
