@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import functools
 import os
 import socket
 import threading
@@ -23,13 +24,23 @@ import armfleet
 Matrix = np.ndarray
 
 
+@functools.cache
+def mesh_loader() -> Any:
+    """Pinocchio reads a Panda's meshes in ~0.6 s: once for all tests."""
+    import coal  # type: ignore[import-untyped, unused-ignore]
+
+    return coal.CachedMeshLoader()
+
+
 def expected_visual_poses(arm: armfleet.Arm) -> dict[str, Matrix]:
     """World pose of each visual node of ``arm`` at its current positions, by MeshCat path.
 
     Computed here from the arm's URDF with Pinocchio, independently of the viewer.
     """
     model = arm.kinematics.model
-    geometry = pin.buildGeomFromUrdfString(model, arm.description.urdf, pin.GeometryType.VISUAL)
+    geometry = pin.buildGeomFromUrdfString(
+        model, arm.description.urdf, pin.GeometryType.VISUAL, mesh_loader=mesh_loader()
+    )
     data, geometry_data = model.createData(), pin.GeometryData(geometry)
     pin.updateGeometryPlacements(model, data, geometry, geometry_data, arm.body.position)
     return {

@@ -43,9 +43,18 @@ class ArmVisual:
         visualizer: the viewer's ``meshcat.Visualizer`` (root ``/meshcat``).
         show_frames: show the ``base_link`` and ``tool0`` frames.
         show_target: show a marker at ``tool0`` of the current motion target.
+        mesh_loader: a ``coal.CachedMeshLoader`` shared by the viewer's arms, so
+            that each mesh file is read once (a Panda's take ~0.6 s), or None.
     """
 
-    def __init__(self, arm: Arm, visualizer: Any, show_frames: bool, show_target: bool) -> None:
+    def __init__(
+        self,
+        arm: Arm,
+        visualizer: Any,
+        show_frames: bool,
+        show_target: bool,
+        mesh_loader: Any = None,
+    ) -> None:
         import meshcat.geometry as mg
         import pinocchio as pin
         from pinocchio.visualize import MeshcatVisualizer
@@ -58,7 +67,7 @@ class ArmVisual:
         model = arm.kinematics.model
         self.model = model
         self.geometry = pin.buildGeomFromUrdfString(
-            model, arm.description.urdf, pin.GeometryType.VISUAL
+            model, arm.description.urdf, pin.GeometryType.VISUAL, mesh_loader=mesh_loader
         )
         self._data = model.createData()
         self._geometry_data = pin.GeometryData(self.geometry)

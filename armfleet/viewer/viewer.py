@@ -119,6 +119,7 @@ class Viewer:
         self._refresher: IdleRefresher | None = None
         self._visuals: dict[str, ArmVisual] = {}
         self._recorder: Recorder = Recorder()
+        self._meshes: Any = _cached_mesh_loader()
         self._lock = threading.RLock()
         self._period_s = 1.0 / display_rate_hz
         self._next_display_s = 0.0
@@ -199,7 +200,9 @@ class Viewer:
 
         try:
             with self._lock:
-                visual = ArmVisual(arm, self._visualizer, self._show_frames, self._show_targets)
+                visual = ArmVisual(
+                    arm, self._visualizer, self._show_frames, self._show_targets, self._meshes
+                )
                 self._visuals[arm.name] = visual
                 self._recorder.add(arm.name)
                 self._frame_camera()
@@ -403,3 +406,12 @@ class Viewer:
     def __repr__(self) -> str:
         state = "closed" if self._closed else (self._error or "running")
         return f"Viewer({self.url!r}, arms={list(self._visuals)}, {state})"
+
+
+def _cached_mesh_loader() -> Any:
+    """A mesh cache for Pinocchio's geometry builder, or None without coal."""
+    try:
+        import coal  # type: ignore[import-untyped, unused-ignore]
+    except ImportError:
+        return None
+    return coal.CachedMeshLoader()
