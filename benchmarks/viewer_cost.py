@@ -15,7 +15,7 @@ process, one without and one with a viewer, alternating runs, and reports:
 Results go to ``benchmarks/results/viewer_cost.json``; screenshots to
 ``test-artifacts/``.
 
-Run: ``python benchmarks/viewer_cost.py [--arms 2 10] [--chunk 1.0] [--repeats 15]``
+Run: ``python benchmarks/viewer_cost.py [--arms 2 10] [--chunk SIM_S] [--repeats 15]``
 """
 
 from __future__ import annotations
@@ -79,6 +79,8 @@ class Result:
     rtf_viewer_off: float
     rtf_viewer_on: float
     ratio_on_off: float
+    #: Median over back-to-back (off, on) pairs of RTF on / RTF off.
+    ratio_on_off_paired: float
     #: CPU seconds per simulated second: simulation process (median of the runs)
     #: plus the viewer's server (total over the runs).
     cpu_s_per_sim_s_off: float
@@ -216,7 +218,7 @@ def open_page(world: armfleet.World, count: int, screenshot: Path) -> tuple[Any,
     return playwright, browser, elapsed
 
 
-def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Result:
+def measure(count: int, chunk_s: float | None, repeats: int, use_browser: bool) -> Result:
     print(f"\n== {count} arms")
     off, on = armfleet.World(), armfleet.World(viewer=True)
     try:
@@ -224,8 +226,10 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
             raise SystemExit(f"the viewer did not start: {on.viewer_error}")
         spawn_off, spawn_on = grid_spawn(off, count), grid_spawn(on, count)
         rng_off, rng_on = np.random.default_rng(count), np.random.default_rng(count)
-        timed_run(off, rng_off, 1.0)  # warm-up: caches, allocations
+        warm_up = timed_run(off, rng_off, 1.0)  # also: caches, allocations
         timed_run(on, rng_on, 1.0)
+        if chunk_s is None:  # ~0.5 s of wall time per run, in whole half seconds
+            chunk_s = max(1.0, 0.5 * round(warm_up.rtf))
         samples_off, samples_on = [], []
         server_0 = server_cpu_s(on)
         for _ in range(repeats):  # alternate, so that load from elsewhere hits both
@@ -251,6 +255,10 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
         median_on = statistics.median(x.rtf for x in samples_on)
         cpu_off = statistics.median(x.cpu_per_sim_s for x in samples_off)
         cpu_on = statistics.median(x.cpu_per_sim_s for x in samples_on) + server_per_sim_s
+        # Each on-run follows its off-run at once: their ratio cancels slow drifts of load.
+        pair_ratio = statistics.median(
+            b.rtf / a.rtf for a, b in zip(samples_off, samples_on, strict=True)
+        )
         result = Result(
             arms=count,
             sim_s_per_run=chunk_s,
@@ -258,6 +266,7 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
             rtf_viewer_off=round(median_off, 3),
             rtf_viewer_on=round(median_on, 3),
             ratio_on_off=round(median_on / median_off, 3),
+            ratio_on_off_paired=round(pair_ratio, 3),
             cpu_s_per_sim_s_off=round(cpu_off, 4),
             cpu_s_per_sim_s_on=round(cpu_on, 4),
             cpu_overhead=round(cpu_on / cpu_off - 1.0, 4),
@@ -278,7 +287,8 @@ def measure(count: int, chunk_s: float, repeats: int, use_browser: bool) -> Resu
 
 def print_table(results: list[Result]) -> None:
     header = (
-        f"{'arms':>4} | {'RTF off':>7} | {'RTF on':>7} | {'on/off':>6} | {'CPU/sim s off':>13} | "
+        f"{'arms':>4} | {'RTF off':>7} | {'RTF on':>7} | {'on/off':>6} | {'paired':>6} | "
+        f"{'CPU/sim s off':>13} | "
         f"{'CPU/sim s on':>12} | {'CPU +':>6} | {'RTF on+page':>11} | {'full scene':>10} | "
         f"{'tick':>8} | {'update':>8}"
     )
@@ -288,7 +298,8 @@ def print_table(results: list[Result]) -> None:
         scene = "-" if r.full_scene_in_browser_s is None else f"{r.full_scene_in_browser_s:.1f} s"
         print(
             f"{r.arms:>4} | {r.rtf_viewer_off:>7.2f} | {r.rtf_viewer_on:>7.2f} | "
-            f"{r.ratio_on_off:>6.3f} | {r.cpu_s_per_sim_s_off:>11.3f} s | "
+            f"{r.ratio_on_off:>6.3f} | {r.ratio_on_off_paired:>6.3f} | "
+            f"{r.cpu_s_per_sim_s_off:>11.3f} s | "
             f"{r.cpu_s_per_sim_s_on:>10.3f} s | {r.cpu_overhead:>+6.1%} | {page:>11} | "
             f"{scene:>10} | {r.tick_not_due_us:>5.2f} us | {r.display_update_ms:>5.2f} ms"
         )
@@ -297,7 +308,9 @@ def print_table(results: list[Result]) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--arms", type=int, nargs="+", default=[2, 10])
-    parser.add_argument("--chunk", type=float, default=1.0, help="simulated s per timed run")
+    parser.add_argument(
+        "--chunk", type=float, default=None, help="simulated s per timed run (~0.5 s wall)"
+    )
     parser.add_argument("--repeats", type=int, default=15, help="timed runs per mode")
     parser.add_argument("--no-browser", action="store_true", help="skip the headless page")
     args = parser.parse_args()
