@@ -36,6 +36,9 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, on_term)  # SIGTERM shuts down like Ctrl-C
+    # Started in the background by a shell, a process inherits SIGINT ignored; this
+    # command runs until Ctrl-C, so Ctrl-C (or kill -INT) must always reach it.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def before_spawn(world: World) -> None:
         recording.start(world)
