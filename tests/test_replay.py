@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-import umsgpack  # type: ignore[import-untyped]
+import umsgpack
 
 import armfleet
 from armfleet.cli.main import main

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import pytest
-import umsgpack  # type: ignore[import-untyped, unused-ignore]
+import umsgpack
 import zmq
 
 import armfleet

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-import umsgpack  # type: ignore[import-untyped, unused-ignore]
+import umsgpack
 from tornado.websocket import websocket_connect
 
 import armfleet
@@ -27,7 +27,7 @@ Matrix = np.ndarray
 @functools.cache
 def mesh_loader() -> Any:
     """Pinocchio reads a Panda's meshes in ~0.6 s: once for all tests."""
-    import coal  # type: ignore[import-untyped, unused-ignore]
+    import coal
 
     return coal.CachedMeshLoader()
 

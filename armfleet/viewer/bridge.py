@@ -44,7 +44,7 @@ import tornado.ioloop
 import tornado.netutil
 import tornado.web
 import tornado.websocket
-import umsgpack  # type: ignore[import-untyped, unused-ignore]
+import umsgpack
 import zmq
 from zmq.eventloop.zmqstream import ZMQStream
 

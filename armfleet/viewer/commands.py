@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import umsgpack  # type: ignore[import-untyped, unused-ignore]
+import umsgpack
 
 #: (command type, node path, property name or b"") of one live update.
 UpdateKey = tuple[bytes, bytes, bytes]

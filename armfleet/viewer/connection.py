@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import umsgpack  # type: ignore[import-untyped, unused-ignore]
+import umsgpack
 import zmq
 
 from armfleet.viewer.errors import ViewerError, ViewerTimeout

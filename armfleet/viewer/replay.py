@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import umsgpack  # type: ignore[import-untyped, unused-ignore]
+import umsgpack
 
 from armfleet.viewer.arm_visual import ArmVisual
 from armfleet.viewer.bridge import OWN_PAGE_FOLDER, meshcat_page_folder, share_mesh

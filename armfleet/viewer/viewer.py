@@ -411,7 +411,7 @@ class Viewer:
 def _cached_mesh_loader() -> Any:
     """A mesh cache for Pinocchio's geometry builder, or None without coal."""
     try:
-        import coal  # type: ignore[import-untyped, unused-ignore]
+        import coal
     except ImportError:
         return None
     return coal.CachedMeshLoader()
