@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import os
 import platform
 import statistics
@@ -34,6 +33,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
 
 import armfleet
 
@@ -58,27 +58,6 @@ class Result:
     mb_per_arm_minute: float
     rss_mb_before: float
     rss_mb_after: float
-
-
-def grid_spawn(world: armfleet.World, count: int) -> None:
-    columns = math.ceil(math.sqrt(count))
-    for i in range(count):
-        world.spawn(f"arm{i}", at=(float(i % columns), float(i // columns)))
-
-
-def retarget(world: armfleet.World, rng: np.random.Generator) -> None:
-    """Give every arm at rest a random target within 0.6 rad of home (reset if stopped)."""
-    for arm in world.arms.values():
-        if arm.is_moving:
-            continue
-        home = np.array(arm.description.home)
-        lower, upper = arm.joint_limits
-        target = np.clip(home + rng.uniform(-0.6, 0.6, size=len(home)), lower, upper)
-        try:
-            arm.move_to(target)
-        except armfleet.ArmfleetError:  # protective stop after touching a neighbour
-            arm.reset()
-            arm.move_to(home)
 
 
 def timed_run(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> float:

@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import os
 import platform
 import statistics
@@ -33,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
 
 import armfleet
 import armfleet.viewer
@@ -93,34 +93,6 @@ class Result:
     display_update_ms: float
     spawn_s_viewer_off: float
     spawn_s_viewer_on: float
-
-
-def grid_spawn(world: armfleet.World, count: int) -> float:
-    """Spawn ``count`` Pandas on a 1 m grid; returns the wall time it took [s]."""
-    columns = math.ceil(math.sqrt(count))
-    started = time.perf_counter()
-    for i in range(count):
-        world.spawn(f"arm{i}", at=(float(i % columns), float(i // columns)))
-    return time.perf_counter() - started
-
-
-def retarget(world: armfleet.World, rng: np.random.Generator) -> None:
-    """Give every arm at rest a random target within 0.6 rad of home and the joint limits.
-
-    Neighbours 1 m apart can still touch; an arm in protective stop is reset
-    and sent home.
-    """
-    for arm in world.arms.values():
-        if arm.is_moving:
-            continue
-        home = np.array(arm.description.home)
-        lower, upper = arm.joint_limits
-        target = np.clip(home + rng.uniform(-0.6, 0.6, size=len(home)), lower, upper)
-        try:
-            arm.move_to(target)
-        except armfleet.ArmfleetError:  # protective stop after touching a neighbour
-            arm.reset()
-            arm.move_to(home)
 
 
 @dataclass
