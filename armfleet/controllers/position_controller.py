@@ -207,16 +207,21 @@ class PositionController(Controller):
             raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
         if self.stop_reason is not None:
             raise ProtectiveStopError(self.arm.name, self.stop_reason)
+        start = self.trajectory.position.copy()
         plan = self.trajectory.plan(values)
-        for name, low, high, lower, upper in zip(
+        # A joint pushed a hair past its limit (an impact, the limit's own give) may
+        # always move back: only going further out than where it starts is refused.
+        for name, low, high, lower, upper, here in zip(
             self.joint_names,
             plan.position_min,
             plan.position_max,
             self.lower,
             self.upper,
+            start,
             strict=True,
         ):
-            if low < lower - LIMIT_TOLERANCE_RAD or high > upper + LIMIT_TOLERANCE_RAD:
+            floor, ceiling = min(lower, here), max(upper, here)
+            if low < floor - LIMIT_TOLERANCE_RAD or high > ceiling + LIMIT_TOLERANCE_RAD:
                 raise MotionLimitError(
                     self.arm.name, name, float(low if low < lower else high), lower, upper
                 )
@@ -270,7 +275,7 @@ class PositionController(Controller):
         if self._anchor_when_stopped and not trajectory.moving:
             # Stopped: hold where the arm is (a contact may have blocked it short of
             # the reference), so it does not keep pushing against what it touched.
-            trajectory.position[:] = q[part]
+            np.clip(q[part], self.lower, self.upper, out=trajectory.position)
             self._anchor_when_stopped = False
 
 
