@@ -93,8 +93,10 @@ def test_a_frozen_then_killed_client_process_is_dropped_and_the_world_goes_on(
         with armfleet.connect(world.address) as client:
             assert client.info().subscriptions == 2
             child.send_signal(signal.SIGSTOP)  # alive but reading nothing
+            # Still connected (its queues drop the oldest) until the server's silent-peer
+            # check drops it after a few seconds; on a loaded machine that can come soon.
+            assert client.info().streams == 1
             assert strictly_increasing(world_times(client, count=10, period=0.1))
-            assert client.info().streams == 1  # still connected: its queues drop the oldest
             child.send_signal(signal.SIGKILL)  # gone mid-stream
             child.wait(timeout=10)
             assert wait_until(lambda: client.info().streams == 0, timeout=15)
