@@ -27,6 +27,7 @@ from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     BringupEvent,
+    Contact,
     FloatArray,
     Positions,
 )
@@ -72,6 +73,10 @@ class World:
     ) -> None:
         if not (math.isfinite(dt) and 0 < dt <= 0.1):
             raise ArmfleetError(f"dt = {dt} s is invalid; choose a step in (0, 0.1] s")
+        if not (math.isfinite(gravity) and abs(gravity) <= 100.0):
+            raise ArmfleetError(
+                f"gravity = {gravity} m/s^2 is invalid; give a value in [-100, 100]"
+            )
         self._dt = dt
         self._client: int = p.connect(p.DIRECT)
         p.setTimeStep(dt, physicsClientId=self._client)
@@ -85,9 +90,7 @@ class World:
         self._step_index = 0
         self._closed = False
         self._tf = TfTree(self._arm_states)
-        self._contacts = ContactMonitor(
-            self._client, self._ground, self._bus, lambda c, d: self._safety.on_new_contact(c, d)
-        )
+        self._contacts = ContactMonitor(self._client, self._ground, self._bus, self._on_contact)
         self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
         self._requests = RequestQueue()
@@ -290,6 +293,9 @@ class World:
     def contacts(self) -> ContactMonitor:
         """Contacts of the last step and the running count."""
         return self._contacts
+
+    def _on_contact(self, contact: Contact, deeper: bool) -> None:
+        self._safety.on_new_contact(contact, deeper)
 
     def _publish_status(self, arm: Arm) -> None:
         self._bus.publish(f"/{arm.name}/status", arm.status(self.time))
