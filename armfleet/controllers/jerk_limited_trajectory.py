@@ -67,18 +67,9 @@ class JerkLimitedTrajectory:
 
     def plan(self, target: FloatArray) -> MotionPlan:
         """Plan from the current reference state to rest at ``target``, without following it."""
-        dofs = len(self.position)
-        candidate = ruckig.InputParameter(dofs)
-        candidate.max_velocity = self._input.max_velocity
-        candidate.max_acceleration = self._input.max_acceleration
-        candidate.max_jerk = self._input.max_jerk
-        candidate.current_position = self.position.tolist()
-        candidate.current_velocity = self.velocity.tolist()
-        candidate.current_acceleration = self.acceleration.tolist()
+        candidate = self._input_from_here(self._input.max_acceleration, self._input.max_jerk)
         candidate.target_position = [float(x) for x in target]
-        candidate.target_velocity = [0.0] * dofs
-        candidate.target_acceleration = [0.0] * dofs
-        trajectory = ruckig.Trajectory(dofs)
+        trajectory = ruckig.Trajectory(len(self.position))
         result = self._otg.calculate(candidate, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot plan this motion: {result}")
@@ -95,24 +86,29 @@ class JerkLimitedTrajectory:
 
         Returns the stopping time [s].
         """
-        dofs = len(self.position)
-        stopping = ruckig.InputParameter(dofs)
+        stopping = self._input_from_here(list(max_acceleration), list(max_jerk))
         stopping.control_interface = ruckig.ControlInterface.Velocity
-        stopping.max_velocity = self._input.max_velocity
-        stopping.max_acceleration = list(max_acceleration)
-        stopping.max_jerk = list(max_jerk)
-        stopping.current_position = self.position.tolist()
-        stopping.current_velocity = self.velocity.tolist()
-        stopping.current_acceleration = self.acceleration.tolist()
-        stopping.target_velocity = [0.0] * dofs
-        stopping.target_acceleration = [0.0] * dofs
-        trajectory = ruckig.Trajectory(dofs)
+        trajectory = ruckig.Trajectory(len(self.position))
         result = self._otg.calculate(stopping, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot plan a stop: {result}")
         self._input = stopping
         self._moving = True
         return float(trajectory.duration)
+
+    def _input_from_here(self, max_acceleration: Any, max_jerk: Any) -> Any:
+        """A Ruckig input starting at the current reference state, ending at rest."""
+        dofs = len(self.position)
+        start = ruckig.InputParameter(dofs)
+        start.max_velocity = self._input.max_velocity
+        start.max_acceleration = max_acceleration
+        start.max_jerk = max_jerk
+        start.current_position = self.position.tolist()
+        start.current_velocity = self.velocity.tolist()
+        start.current_acceleration = self.acceleration.tolist()
+        start.target_velocity = [0.0] * dofs
+        start.target_acceleration = [0.0] * dofs
+        return start
 
     def follow(self, plan: MotionPlan) -> None:
         """Start following ``plan`` (made by :meth:`plan` from the current state)."""
