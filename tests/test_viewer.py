@@ -33,6 +33,7 @@ from armfleet.viewer.connection import BridgeConnection
 from armfleet.viewer.replay import quaternions_xyzw
 from tests.viewer_helpers import (
     SceneWatcher,
+    bob_and_toby_viewed,
     expected_visual_poses,
     non_loopback_ipv4,
     process_alive,
@@ -49,14 +50,8 @@ POSE_TOLERANCE = 1e-4
 @pytest.fixture(scope="module")
 def viewed() -> Iterator[armfleet.World]:
     """A world with a viewer, bob at (0, 0) and toby at (1, 0)."""
-    world = armfleet.World(viewer=True)
-    try:
-        assert world.viewer is not None, world.viewer_error
-        world.spawn("bob", at=(0, 0))
-        world.spawn("toby", at=(1, 0))
+    with bob_and_toby_viewed() as world:
         yield world
-    finally:
-        world.close()
 
 
 def viewer_of(world: armfleet.World) -> Viewer:

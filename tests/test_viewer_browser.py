@@ -20,7 +20,7 @@ from PIL import Image
 
 import armfleet
 from armfleet.viewer.scene import BACKGROUND_TOP
-from tests.viewer_helpers import expected_visual_poses
+from tests.viewer_helpers import bob_and_toby_viewed, expected_visual_poses
 
 CHROMIUM = Path("/usr/bin/chromium")
 #: FIELD-NOTES: software WebGL via SwiftShader; never --use-gl=swiftshader (all white).
@@ -155,14 +155,8 @@ def browser() -> Iterator[Any]:
 @pytest.fixture(scope="module")
 def live() -> Iterator[armfleet.World]:
     """A world with a viewer, bob at (0, 0) and toby at (1, 0)."""
-    world = armfleet.World(viewer=True)
-    try:
-        assert world.viewer is not None, world.viewer_error
-        world.spawn("bob", at=(0, 0))
-        world.spawn("toby", at=(1, 0))
+    with bob_and_toby_viewed() as world:
         yield world
-    finally:
-        world.close()
 
 
 @dataclass

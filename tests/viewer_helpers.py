@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import contextlib
 import functools
 import os
 import socket
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,19 @@ from tornado.websocket import websocket_connect
 import armfleet
 
 Matrix = np.ndarray
+
+
+@contextlib.contextmanager
+def bob_and_toby_viewed() -> Iterator[armfleet.World]:
+    """A world with a viewer, bob at (0, 0) and toby at (1, 0); closed on exit."""
+    world = armfleet.World(viewer=True)
+    try:
+        assert world.viewer is not None, world.viewer_error
+        world.spawn("bob", at=(0, 0))
+        world.spawn("toby", at=(1, 0))
+        yield world
+    finally:
+        world.close()
 
 
 @functools.cache
