@@ -10,6 +10,7 @@ every arm still tracking at the end. Prints a summary and writes JSON.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -73,22 +74,32 @@ def soak(spec: FleetSpec, duration_s: float, seed: int) -> dict[str, object]:
             world.run(COMMAND_PERIOD_S)
             if world.time <= warm_up_s:
                 warm_rss = rss_mb()
-        # The end: every arm, once at rest, goes home and must track it.
-        pending = set(world.arms)
-        deadline = world.time + 10.0
-        while pending and world.time < deadline:
-            for name in sorted(pending):
+        # The end: every arm goes home, one retry after another (arms touching on the
+        # way stop, are reset and sent again), then must be tracking its reference.
+        deadline = world.time + 30.0
+        while world.time < deadline:
+            away = [
+                name
+                for name, arm in world.arms.items()
+                if float(np.abs(arm.positions - homes[name]).max()) > TRACKING_BOUND_RAD
+            ]
+            if not away:
+                break
+            for name in away:
                 arm = world.arm(name)
                 if not arm.is_moving:
                     arm.reset()
-                    arm.move_to(homes[name])
-                    pending.discard(name)
-            world.run(0.1)
-        world.run(5.0)
+                    with contextlib.suppress(armfleet.ArmfleetError):
+                        arm.move_to(homes[name])
+            world.run(0.5)
         final_errors = {
             name: float(np.abs(arm.positions - homes[name]).max())
             for name, arm in world.arms.items()
         }
+        tracking_errors = {
+            name: arm.position_controller.tracking_error for name, arm in world.arms.items()
+        }
+        faulted = [name for name, arm in world.arms.items() if arm.controller_manager.fault]
         wall_s = time.perf_counter() - wall_start
         end_rss = rss_mb()
         return {
@@ -104,8 +115,13 @@ def soak(spec: FleetSpec, duration_s: float, seed: int) -> dict[str, object]:
             "resets": resets,
             "refused_targets": refused,
             "non_finite_states": non_finite,
-            "worst_final_error_rad": max(final_errors.values()),
-            "all_tracking": all(e < TRACKING_BOUND_RAD for e in final_errors.values()),
+            "arms_home": sum(e < TRACKING_BOUND_RAD for e in final_errors.values()),
+            "worst_distance_from_home_rad": max(final_errors.values()),
+            "worst_tracking_error_rad": max(tracking_errors.values()),
+            "arms_in_error": len(faulted),
+            "all_tracking": not faulted
+            and all(e < TRACKING_BOUND_RAD for e in tracking_errors.values())
+            and all(e < TRACKING_BOUND_RAD for e in final_errors.values()),
         }
     finally:
         world.close()
