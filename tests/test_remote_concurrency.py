@@ -22,7 +22,8 @@ HOLD_TOLERANCE_RAD = 2e-3
 @pytest.fixture
 def world(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[WorldProcess]:
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
-    process = WorldProcess(tmp_path, "bob", "--at", "0,0", "--no-viewer", "--fast")
+    # Paced to the wall clock, so the world leaves CPU to the 8 client threads.
+    process = WorldProcess(tmp_path, "bob", "--at", "0,0", "--no-viewer", "--realtime")
     yield process
     assert process.stop() == 0
     assert not api_threads()
