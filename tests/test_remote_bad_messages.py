@@ -14,12 +14,16 @@ import pytest
 import zmq
 
 import armfleet
+from armfleet.description import ModelLibrary
 from armfleet.remote.protocol import MAX_REQUEST_BYTES, PROTOCOL_VERSION
 from tests.remote_world import WorldProcess, wait_until
 
 #: How still a holding arm stays between two reads [rad]: its controller's hold tolerance.
 UNTOUCHED_RAD = 1e-3
 REPLY_TIMEOUT_MS = 10_000
+
+#: How an unknown-model error lists the choices: every model in description/.
+AVAILABLE_MODELS = "available: " + ", ".join(ModelLibrary().names)
 
 
 def request(op: Any, args: Any = None, **extra: Any) -> dict[str, Any]:
@@ -180,7 +184,7 @@ CASES = [
         "unknown model",
         lambda t: one(request("spawn", {"name": "carol", "model": "pand", "at": [2, 0]})),
         "UnknownModel",
-        "available: panda, ur5",
+        AVAILABLE_MODELS,
     ),
     Case(
         "duplicate arm name",

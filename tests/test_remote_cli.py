@@ -12,7 +12,11 @@ import pytest
 
 import armfleet
 from armfleet.cli.main import main
+from armfleet.description import ModelLibrary
 from tests.remote_world import WorldProcess, api_threads, cli, runtime_file
+
+#: How an unknown-model error lists the choices: every model in description/.
+AVAILABLE_MODELS = "available: " + ", ".join(ModelLibrary().names)
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +54,7 @@ def fails(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
         (["topic", "show"], "invalid choice: 'show'"),
         (["step"], "the world is running; pause it first"),
         (["spawn", "carol", "--at", "0.1,0"], "bases must be >= 0.25 m apart"),
-        (["spawn", "carol", "--at", "2,0", "--model", "pand"], "available: panda, ur5"),
+        (["spawn", "carol", "--at", "2,0", "--model", "pand"], AVAILABLE_MODELS),
         (["spawn", "bob", "--at", "2,0"], "'bob' is already used in this world"),
         (
             ["spawn", "carol", "--at", "2,0", "--fast", "--duration", "1"],

@@ -13,12 +13,16 @@ import armfleet
 from armfleet.cli.spawn_command import spec_from_arguments
 from armfleet.controllers.parameters import controller_file, load_parameters
 from armfleet.controllers.registry import CONTROLLER_TYPES
+from armfleet.description import ModelLibrary
 from armfleet.launch import launch
 from armfleet.paths import data_dir
 from armfleet.spec import FleetSpec, SpecError, load_spec, parse_spec
 
 SHIPPED_SPECS = sorted(data_dir("launch_specs").glob("*.yaml"))
 SHIPPED_CONTROLLER_FILES = sorted(data_dir("controllers").glob("*.yaml"))
+
+#: How an unknown-model error lists the choices: every model in description/.
+AVAILABLE_MODELS = "available: " + ", ".join(ModelLibrary().names)
 
 
 def test_every_spec_and_controller_file_is_shipped() -> None:
@@ -83,7 +87,7 @@ BAD_SPECS = {
     "malformed name": ("arms:\n  - name: Bob\n    model: panda\n", 2, "^[a-z][a-z0-9_]*$"),
     "duplicate name": ("arms:\n" + BOB + BOB.replace("  - ", "  - ") + "    at_m: [2, 0]\n", 4,
                        "used twice"),
-    "unknown model": ("arms:\n  - name: bob\n    model: pand\n", 3, "available: panda, ur5"),
+    "unknown model": ("arms:\n  - name: bob\n    model: pand\n", 3, AVAILABLE_MODELS),
     "yaw without unit": ("arms:\n" + BOB + "    yaw: 90\n", 4, "did you mean 'yaw_deg'"),
     "at wrong length": ("arms:\n" + BOB + "    at_m: [1]\n", 4, "expected 2 or 3 numbers [m]"),
     "two orientations": ("arms:\n" + BOB + "    yaw_deg: 90\n    rpy_deg: [0, 0, 90]\n", 5,
