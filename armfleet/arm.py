@@ -5,8 +5,10 @@ from __future__ import annotations
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
+from armfleet.controllers.gripper_controller import GripperController
 from armfleet.description import ArmDescription
-from armfleet.errors import ArmFault
+from armfleet.errors import ArmFault, NoGripper
+from armfleet.gripper import Gripper
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     ArmMode,
@@ -40,6 +42,7 @@ class Arm:
         position_controller: PositionController,
         state_publisher: RobotStatePublisher,
         safety: SafetySupervisor,
+        gripper_controller: GripperController | None = None,
     ) -> None:
         self._name = name
         self._pose = pose
@@ -52,6 +55,10 @@ class Arm:
         self.position_controller = position_controller
         self.state_publisher = state_publisher
         self._safety = safety
+        self.gripper_controller = gripper_controller
+        self._gripper = (
+            None if gripper_controller is None else Gripper(name, gripper_controller, bus)
+        )
 
     @property
     def name(self) -> str:
@@ -79,6 +86,21 @@ class Arm:
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
         """(lower, upper) position limits of :attr:`joint_names` [rad or m]."""
         return self.position_controller.lower.copy(), self.position_controller.upper.copy()
+
+    @property
+    def gripper(self) -> Gripper:
+        """The fingers: ``open()``, ``close(force)``, ``move_to(width)``, ``width``, ``holding``.
+
+        Raises:
+            NoGripper: the model has no fingers.
+        """
+        if self._gripper is None:
+            raise NoGripper(self._name, self.model)
+        return self._gripper
+
+    @property
+    def has_gripper(self) -> bool:
+        return self._gripper is not None
 
     @property
     def joint_state(self) -> JointState:

@@ -18,6 +18,7 @@ from armfleet.controllers import (
     JointStateBroadcaster,
     PositionController,
 )
+from armfleet.controllers.gripper_controller import GripperController, finger_indices
 from armfleet.controllers.parameters import load_parameters
 from armfleet.controllers.position_controller import check_target
 from armfleet.controllers.registry import CONTROLLER_TYPES
@@ -119,11 +120,21 @@ def assemble_arm(
         manager.load(controller)
         broadcaster.configure()
         controller.configure()
+        gripper = None
+        if finger_indices(kinematics).size:
+            gripper = GripperController(
+                context,
+                parameter_files.get(GripperController.type_name),
+                parameters.get(GripperController.type_name),
+                position_controller=controller,
+            )
+            manager.load(gripper)
+            gripper.configure()
     except BaseException:
         body.remove()
         raise
     publisher = RobotStatePublisher(name, kinematics, bus, stamp)
     return Arm(
         name, pose, description, body, kinematics, bus, manager, broadcaster, controller,
-        publisher, safety,
+        publisher, safety, gripper,
     )  # fmt: skip

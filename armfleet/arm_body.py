@@ -138,5 +138,12 @@ class ArmBody:
         matrix[:3, 3] = state[4]
         return matrix
 
+    def bodies_touching(self, link_index: int) -> set[int]:
+        """PyBullet ids of the other bodies in contact with link ``link_index`` now."""
+        points = p.getContactPoints(
+            bodyA=self.body_id, linkIndexA=link_index, physicsClientId=self._client
+        )
+        return {point[2] for point in points if point[2] != self.body_id and point[8] <= 0.0}
+
     def remove(self) -> None:
         p.removeBody(self.body_id, physicsClientId=self._client)

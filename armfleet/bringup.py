@@ -39,6 +39,8 @@ def bring_up(world: World, arm: Arm, started: float, on_ready: Callable[[Arm], N
     _activate_broadcaster(world, arm)
     _report(world, arm.name, BringupStage.BROADCASTER_ACTIVE, started)
     arm.controller_manager.activate("position_controller")
+    if arm.gripper_controller is not None:
+        arm.controller_manager.activate(arm.gripper_controller.name)
     _report(world, arm.name, BringupStage.CONTROLLER_ACTIVE, started)
     _wait_holding(world, arm)
     on_ready(arm)

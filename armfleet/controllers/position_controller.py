@@ -19,7 +19,11 @@ import numpy as np
 import numpy.typing as npt
 
 from armfleet.controllers.controller import Controller
-from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory, MotionPlan
+from armfleet.controllers.jerk_limited_trajectory import (
+    JerkLimitedTrajectory,
+    MotionPlan,
+    SampledMotion,
+)
 from armfleet.controllers.parameters import ParameterSpec
 from armfleet.errors import (
     ArmfleetError,
@@ -90,6 +94,8 @@ class PositionController(Controller):
         self._scratch = np.zeros(size)
         self._saturated = np.zeros(size, dtype=bool)
         self._negative_effort_limit = -self._effort_limit
+        #: Joints another controller drives (the gripper's fingers): no feedback here.
+        self._released = np.zeros(0, dtype=int)
         self.trajectory: JerkLimitedTrajectory | None = None
         self._state_topic = self.arm.topic("position_controller/state")
         self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
@@ -120,6 +126,17 @@ class PositionController(Controller):
 
     def on_deactivate(self) -> None:
         self.arm.body.engage_brakes()
+
+    def release(self, indices: npt.NDArray[np.int_]) -> None:
+        """Leave the auxiliary joints ``indices`` (into q) to another controller.
+
+        Their reference acceleration is zero in the inverse dynamics (they are
+        not pulled back to where they were held) and their efforts are the other
+        controller's to write, after this one's update.
+        """
+        if np.intersect1d(indices, self._arm).size:
+            raise ArmfleetError(f"{self.arm.name}: position_controller keeps the arm joints")
+        self._released = np.asarray(indices, dtype=int)
 
     @property
     def held_positions(self) -> FloatArray:
@@ -153,6 +170,38 @@ class PositionController(Controller):
         assert self.trajectory is not None  # plan() checked it
         self.trajectory.follow(plan)
         return plan.duration
+
+    def follow(self, plan: MotionPlan) -> None:
+        """Follow ``plan``, made by :meth:`plan` from the current reference (not yet advanced)."""
+        if self.stop_reason is not None:
+            raise ProtectiveStopError(self.arm.name, self.stop_reason)
+        assert self.trajectory is not None  # plan() checked it
+        self.trajectory.follow(plan)
+
+    def follow_samples(self, motion: SampledMotion) -> None:
+        """Follow a sampled reference (one row per period), checked against the limits.
+
+        Raises:
+            ProtectiveStopError, ArmfleetError: not followed; the current motion goes on.
+        """
+        if self.trajectory is None:
+            raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
+        if self.stop_reason is not None:
+            raise ProtectiveStopError(self.arm.name, self.stop_reason)
+        slack = 1.0 + 1e-9
+        if (
+            np.any(motion.position < self.lower - LIMIT_TOLERANCE_RAD)
+            or np.any(motion.position > self.upper + LIMIT_TOLERANCE_RAD)
+            or np.any(np.abs(motion.velocity) > self.max_velocity * slack)
+            or np.any(
+                np.abs(motion.acceleration) > self.parameters["max_acceleration_rad_s2"] * slack
+            )
+        ):
+            raise ArmfleetError(
+                f"{self.arm.name}: the sampled motion leaves the joint position, velocity or "
+                "acceleration limits"
+            )
+        self.trajectory.follow_samples(motion)
 
     @property
     def protective_stop_enabled(self) -> bool:
@@ -192,7 +241,7 @@ class PositionController(Controller):
         """Accept motions again after a protective stop."""
         self.stop_reason = None
 
-    def plan(self, target: Positions) -> MotionPlan:
+    def plan(self, target: Positions, minimum_duration_s: float | None = None) -> MotionPlan:
         """Plan a motion to ``target`` from the current reference, checked, not followed.
 
         A target sent mid-motion is planned from the moving reference; if the
@@ -208,7 +257,7 @@ class PositionController(Controller):
         if self.stop_reason is not None:
             raise ProtectiveStopError(self.arm.name, self.stop_reason)
         start = self.trajectory.position.copy()
-        plan = self.trajectory.plan(values)
+        plan = self.trajectory.plan(values, minimum_duration_s)
         # A joint pushed a hair past its limit (an impact, the limit's own give) may
         # always move back: only going further out than where it starts is refused.
         for name, low, high, lower, upper, here in zip(
@@ -251,6 +300,8 @@ class PositionController(Controller):
         scratch *= self._kd
         acceleration += scratch
         acceleration += self._ref_acceleration
+        if self._released.size:
+            acceleration[self._released] = 0.0
         tau = self.arm.kinematics.inverse_dynamics(q, v, acceleration)
         np.abs(tau, out=scratch)
         np.greater(scratch, self._effort_limit, out=self._saturated)

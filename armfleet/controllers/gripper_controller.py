@@ -1,0 +1,247 @@
+"""gripper_controller: the fingers of a parallel gripper, to a width or closed with a force.
+
+The fingers are the arm's prismatic joints off the base_link -> tool0 chain
+(the Panda's two fingers); the opening ``width`` is the sum of their positions.
+The position_controller leaves them to this controller, which runs after it
+and writes their efforts:
+
+* to a width: a jerk-limited (Ruckig) reference per finger, followed by
+  ``f = m a_ref + k (q_ref - q) + c (v_ref - v) + damping v``, clipped to the force limit;
+* closing: the same, towards width 0. A finger that falls more than
+  ``block_distance_m`` behind its reference is blocked by something and from
+  then on presses with the grasp force. Fingers that reach their limit instead
+  have closed on nothing.
+
+It holds something when both fingers press on the same body.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from armfleet.controllers.controller import ArmContext, Controller
+from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
+from armfleet.controllers.parameters import ParameterSpec
+from armfleet.controllers.position_controller import PositionController
+from armfleet.errors import ArmfleetError, GripperCommandError
+from armfleet.kinematics import ArmKinematics
+from armfleet.messages import GripperCommand, GripperMode, GripperState
+
+logger = logging.getLogger("armfleet")
+
+#: Pinocchio joint types of a finger (prismatic along any axis).
+_PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
+
+
+def finger_indices(kinematics: ArmKinematics) -> npt.NDArray[np.int_]:
+    """Indices (into q) of the arm's fingers: prismatic joints off the base-tool chain."""
+    model = kinematics.model
+    fingers = [
+        model.joints[j].idx_q
+        for j in range(1, model.njoints)
+        if model.joints[j].idx_q in kinematics.auxiliary_indices
+        and model.joints[j].shortname() in _PRISMATIC
+    ]
+    return np.array(fingers, dtype=int)
+
+
+class GripperController(Controller):
+    """Takes :class:`GripperCommand` on ``/<arm>/gripper_controller/commands``.
+
+    Args:
+        position_controller: the arm's controller, which releases the fingers to this one.
+    """
+
+    type_name = "gripper_controller"
+    rate_parameter = "update_rate_hz"
+    parameter_schema = (
+        ParameterSpec("update_rate_hz", 1000.0, "control rate [Hz]", 1.0, 100_000.0),
+        ParameterSpec("max_speed_m_s", 0.1, "speed limit of each finger [m/s]", 1e-3, 10.0),
+        ParameterSpec("max_acceleration_m_s2", 2.0, "acceleration limit of each finger", 1e-3, 1e3),
+        ParameterSpec("max_jerk_m_s3", 100.0, "jerk limit of each finger [m/s^3]", 1e-3, 1e6),
+        ParameterSpec("stiffness_n_m", 2000.0, "position feedback of each finger [N/m]", 0.0, 1e6),
+        ParameterSpec("damping_n_s_m", 12.0, "velocity feedback of each finger [N s/m]", 0.0, 1e4),
+        ParameterSpec("grasp_force_n", 20.0, "default grasp force of each finger [N]", 0.1, 1e4),
+        ParameterSpec(
+            "block_distance_m", 0.002, "lag behind the reference that means blocked", 1e-5, 0.1
+        ),
+        ParameterSpec("min_width_m", 0.002, "narrower than this, nothing is held [m]", 0.0, 0.1),
+    )
+    writes_commands = True
+
+    def __init__(
+        self,
+        arm: ArmContext,
+        parameter_file: Path | None = None,
+        overrides: Mapping[str, Any] | None = None,
+        *,
+        position_controller: PositionController,
+    ) -> None:
+        super().__init__(arm, parameter_file, overrides)
+        self._position_controller = position_controller
+
+    def on_configure(self) -> None:
+        kinematics = self.arm.kinematics
+        self._fingers = finger_indices(kinematics)
+        if self._fingers.size == 0:
+            raise ArmfleetError(f"{self.arm.name}: the model has no fingers for a gripper")
+        self.finger_names = tuple(kinematics.joint_names[i] for i in self._fingers)
+        self._links = [self.arm.body.joint_indices[i] for i in self._fingers]
+        self._lower = kinematics.lower[self._fingers]
+        self._upper = kinematics.upper[self._fingers]
+        #: Widest opening [m].
+        self.max_width = float(np.sum(self._upper))
+        #: Largest force a finger can press with (its URDF effort limit) [N].
+        self.max_force = float(np.min(kinematics.effort_limit[self._fingers]))
+        joint_ids = [
+            j
+            for j in range(1, kinematics.model.njoints)
+            if kinematics.model.joints[j].idx_q in self._fingers
+        ]
+        self._mass = np.array([kinematics.model.inertias[j].mass for j in joint_ids])
+        self._damping = kinematics.damping[self._fingers]
+        n = self._fingers.size
+        self._speed = np.minimum(
+            kinematics.velocity_limit[self._fingers], self.parameters["max_speed_m_s"]
+        )
+        self._acceleration = np.full(n, float(self.parameters["max_acceleration_m_s2"]))
+        self._jerk = np.full(n, float(self.parameters["max_jerk_m_s3"]))
+        self._stiffness = float(self.parameters["stiffness_n_m"])
+        self._gain_damping = float(self.parameters["damping_n_s_m"])
+        self.trajectory: JerkLimitedTrajectory | None = None
+        self._blocked = np.zeros(n, dtype=bool)
+        self._grasp = False
+        self._force = min(float(self.parameters["grasp_force_n"]), self.max_force)
+        self._target_width = 0.0
+        self._effort = np.zeros(n)
+        self._state_topic = self.arm.topic("gripper_controller/state")
+        commands = self.arm.topic("gripper_controller/commands")
+        self.arm.bus.advertise(commands, GripperCommand)
+        self.arm.bus.advertise(self._state_topic, GripperState)
+        self._subscription = self.arm.bus.subscribe(commands, self._on_command)
+
+    def on_cleanup(self) -> None:
+        self._subscription.cancel()
+        self.trajectory = None
+
+    def on_activate(self) -> None:
+        start = np.clip(self.arm.body.position[self._fingers], self._lower, self._upper)
+        self.trajectory = JerkLimitedTrajectory(
+            start, self.period, self._speed, self._acceleration, self._jerk
+        )
+        self._blocked[:] = False
+        self._grasp = False
+        self._target_width = float(np.sum(start))
+        self._position_controller.release(self._fingers)
+
+    def on_deactivate(self) -> None:
+        self._position_controller.release(np.zeros(0, dtype=int))
+
+    # -- commands ---------------------------------------------------------------------
+    def check(self, command: GripperCommand) -> GripperCommand:
+        """Return ``command`` if it is valid, else raise what a user needs to fix it."""
+        if not (math.isfinite(command.force) and 0.0 < command.force <= self.max_force):
+            raise GripperCommandError(
+                self.arm.name, "force", command.force, "N", 0.0, self.max_force
+            )
+        if not command.grasp and not (
+            math.isfinite(command.width) and 0.0 <= command.width <= self.max_width
+        ):
+            raise GripperCommandError(
+                self.arm.name, "width", command.width, "m", 0.0, self.max_width
+            )
+        return command
+
+    def command(self, command: GripperCommand) -> None:
+        """Start ``command`` now (checked first; the current one is dropped)."""
+        self.check(command)
+        if self.trajectory is None:
+            raise ArmfleetError(f"{self.arm.name}: gripper_controller is not active")
+        width = 0.0 if command.grasp else command.width
+        per_finger = np.clip(
+            self._lower + (width - np.sum(self._lower)) / self._fingers.size,
+            self._lower,
+            self._upper,
+        )
+        self.trajectory.follow(self.trajectory.plan(per_finger))
+        self._grasp = command.grasp
+        self._force = command.force
+        self._target_width = width
+        self._blocked[:] = False
+
+    def _on_command(self, command: GripperCommand) -> None:
+        try:
+            self.command(command)
+        except ArmfleetError as exc:
+            logger.warning("rejected gripper command: %s", exc)
+
+    # -- state ------------------------------------------------------------------------
+    @property
+    def width(self) -> float:
+        """Measured opening between the finger pads [m]."""
+        return float(np.sum(self.arm.body.position[self._fingers]))
+
+    @property
+    def target_width(self) -> float:
+        return self._target_width
+
+    @property
+    def force(self) -> float:
+        """Force the fingers press with now [N] (mean of their efforts, positive closing)."""
+        return float(-np.mean(self._effort))
+
+    @property
+    def mode(self) -> GripperMode:
+        moving = self.trajectory is not None and self.trajectory.moving
+        if not self._grasp:
+            return GripperMode.MOVING if moving else GripperMode.AT_WIDTH
+        if self.width <= self.parameters["min_width_m"] and not moving:
+            return GripperMode.CLOSED
+        if self._blocked.all():
+            return (
+                GripperMode.SQUEEZING
+                if self.width > self.parameters["min_width_m"]
+                else (GripperMode.CLOSED)
+            )
+        return GripperMode.CLOSING
+
+    @property
+    def holding(self) -> bool:
+        """Squeezing something that both fingers touch."""
+        if self.mode is not GripperMode.SQUEEZING:
+            return False
+        touching = [self.arm.body.bodies_touching(link) for link in self._links]
+        return bool(set.intersection(*touching))
+
+    def gripper_state(self, stamp: float) -> GripperState:
+        return GripperState(
+            stamp, self.width, self._target_width, self.force, self.mode, self.holding
+        )
+
+    # -- control ----------------------------------------------------------------------
+    def update(self, stamp: float) -> None:
+        trajectory = self.trajectory
+        assert trajectory is not None  # set by on_activate
+        body = self.arm.body
+        q, v = body.position[self._fingers], body.velocity[self._fingers]
+        if self._grasp:
+            self._blocked |= q - trajectory.position > self.parameters["block_distance_m"]
+        effort = (
+            self._mass * trajectory.acceleration
+            + self._stiffness * (trajectory.position - q)
+            + self._gain_damping * (trajectory.velocity - v)
+            + self._damping * v
+        )
+        effort[self._blocked] = -self._force
+        np.clip(effort, -self._force, self._force, out=self._effort)
+        body.effort_command[self._fingers] = self._effort
+        if self.arm.bus.has_subscribers(self._state_topic):
+            self.arm.bus.publish(self._state_topic, self.gripper_state(stamp))
+        trajectory.advance()

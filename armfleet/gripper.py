@@ -1,0 +1,84 @@
+"""The handle users hold for an arm's gripper: ``arm.gripper.close()``, ``.open()``, ``.width``."""
+
+from __future__ import annotations
+
+from armfleet.bus import Bus
+from armfleet.controllers.gripper_controller import GripperController
+from armfleet.messages import GripperCommand, GripperMode, GripperState
+
+
+class Gripper:
+    """The fingers of one arm, driven by its ``gripper_controller``.
+
+    Commands return at once and go out on ``/<arm>/gripper_controller/commands``;
+    step the world to see them carried out. Invalid ones raise
+    :class:`armfleet.errors.GripperCommandError` and change nothing.
+    """
+
+    def __init__(self, arm: str, controller: GripperController, bus: Bus) -> None:
+        self._controller = controller
+        self._bus = bus
+        self._topic = f"/{arm}/gripper_controller/commands"
+
+    def open(self, *, force: float | None = None) -> None:
+        """Open to the widest width."""
+        self.move_to(self._controller.max_width, force=force)
+
+    def move_to(self, width: float, *, force: float | None = None) -> None:
+        """Go to the opening ``width`` [m], pushing with at most ``force`` [N] per finger."""
+        self._send(GripperCommand(float(width), False, self._force(force)))
+
+    def close(self, force: float | None = None) -> None:
+        """Close until blocked, then press with ``force`` [N] per finger (the
+        ``grasp_force_n`` parameter by default)."""
+        self._send(GripperCommand(0.0, True, self._force(force)))
+
+    def _force(self, force: float | None) -> float:
+        if force is None:
+            return min(float(self._controller.parameters["grasp_force_n"]), self.max_force)
+        return float(force)
+
+    def _send(self, command: GripperCommand) -> None:
+        self._controller.check(command)
+        self._bus.publish(self._topic, command)
+
+    @property
+    def width(self) -> float:
+        """Measured opening between the finger pads [m]."""
+        return self._controller.width
+
+    @property
+    def max_width(self) -> float:
+        """Widest opening [m]."""
+        return self._controller.max_width
+
+    @property
+    def max_force(self) -> float:
+        """Strongest force a finger can press with [N] (its URDF effort limit)."""
+        return self._controller.max_force
+
+    @property
+    def force(self) -> float:
+        """Force each finger presses with now [N] (positive closing)."""
+        return self._controller.force
+
+    @property
+    def mode(self) -> GripperMode:
+        return self._controller.mode
+
+    @property
+    def holding(self) -> bool:
+        """Whether the fingers squeeze something both of them touch."""
+        return self._controller.holding
+
+    @property
+    def is_moving(self) -> bool:
+        """Whether the fingers are still on their way (to a width, or closing)."""
+        return self._controller.mode in (GripperMode.MOVING, GripperMode.CLOSING)
+
+    def state(self, stamp: float = 0.0) -> GripperState:
+        """The gripper's state (as published on ``/<arm>/gripper_controller/state``)."""
+        return self._controller.gripper_state(stamp)
+
+    def __repr__(self) -> str:
+        return f"Gripper(width={self.width:.4f} m, mode={self.mode.value!r})"
