@@ -135,3 +135,94 @@ class BringupError(ArmfleetError):
 class WorldClosed(ArmfleetError):
     def __init__(self) -> None:
         super().__init__("this world is closed; create a new armfleet.World()")
+
+
+class ObjectError(ArmfleetError):
+    """A scene object that cannot be made as asked (shape, size, mass, mesh file, name...).
+
+    Attributes:
+        name: the object's name.
+        field: the offending argument (``"shape"``, ``"size"``, ``"mass"``, ...).
+        problem: what is wrong and what would be right.
+    """
+
+    def __init__(self, name: object, field: str, problem: str) -> None:
+        self.name, self.field, self.problem = name, field, problem
+        super().__init__(f"object {name!r}: {field}: {problem}")
+
+
+class UnknownObject(ArmfleetError):
+    def __init__(self, name: str, existing: Sequence[str]) -> None:
+        self.name = name
+        super().__init__(f"no object named {name!r}; objects: {_choices(existing)}")
+
+
+class NameInUse(ArmfleetError):
+    """A new arm or object named like something already in the world."""
+
+    def __init__(self, name: str, kind: str, arms: Sequence[str], objects: Sequence[str]) -> None:
+        self.name = name
+        super().__init__(
+            f"name {name!r} is already used in this world by {kind}; names are unique across "
+            f"arms ({_choices(arms)}) and objects ({_choices(objects)})"
+        )
+
+
+class NoGripper(ArmfleetError):
+    """The arm's model has no fingers to grip with."""
+
+    def __init__(self, arm: str, model: str) -> None:
+        self.arm, self.model = arm, model
+        super().__init__(
+            f"{arm} ({model}) has no gripper: only models with prismatic fingers have one "
+            "(e.g. panda)"
+        )
+
+
+class GripperCommandError(ArmfleetError):
+    """A gripper width or force outside what the fingers can do."""
+
+    def __init__(
+        self, arm: str, field: str, value: float, unit: str, low: float, high: float
+    ) -> None:
+        self.arm, self.field, self.value = arm, field, value
+        opening = "(" if field == "force" else "["
+        super().__init__(
+            f"{arm}: gripper {field} {value:g} {unit} is invalid; give a value in "
+            f"{opening}{low:g}, {high:g}] {unit}"
+        )
+
+
+class TargetPoseError(ArmfleetError):
+    """A Cartesian goal that is not a rigid transform (4x4 homogeneous matrix or SE3)."""
+
+
+class UnreachablePose(ArmfleetError):
+    """No joint positions within the limits put the arm's frame at the wanted pose."""
+
+    def __init__(
+        self,
+        arm: str,
+        link: str,
+        position_error_m: float,
+        rotation_error_rad: float,
+        where: str = "",
+    ) -> None:
+        self.arm, self.link = arm, link
+        self.position_error_m, self.rotation_error_rad = position_error_m, rotation_error_rad
+        super().__init__(
+            f"{arm}: {link} cannot reach the pose{where} within the joint limits (best residual "
+            f"{position_error_m * 1e3:.3g} mm, {rotation_error_rad * 1e3:.3g} mrad); nothing "
+            "moved: choose a pose within the arm's reach"
+        )
+
+
+class ArmInMotion(ArmfleetError):
+    """A motion that must start from rest was asked of a moving arm."""
+
+    def __init__(self, arm: str, what: str) -> None:
+        self.arm = arm
+        super().__init__(
+            f"{arm} is moving; {what} starts from rest: wait until arm.is_moving is False "
+            "(the current motion goes on)"
+        )

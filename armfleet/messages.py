@@ -186,3 +186,50 @@ class ArmStatus:
     mode: ArmMode
     reason: str
     saturation_steps: tuple[int, ...]
+
+
+class GripperMode(enum.Enum):
+    """What a gripper is doing, as reported on ``/<arm>/gripper_controller/state``."""
+
+    MOVING = "moving"  # fingers on their way to a commanded width
+    AT_WIDTH = "at width"  # fingers at the commanded width (open, or a given width)
+    CLOSING = "closing"  # closing until the fingers are blocked
+    SQUEEZING = "squeezing"  # blocked by something: pressing with the grasp force
+    CLOSED = "closed"  # closed on nothing: the fingers met their limit
+
+
+@dataclass(frozen=True)
+class GripperCommand:
+    """On ``/<arm>/gripper_controller/commands``: go to a width, or close with a force.
+
+    Attributes:
+        width: target opening between the finger pads [m]; ignored when ``grasp``.
+        grasp: close until blocked, then press with ``force``.
+        force: force limit of each finger [N] (the grasp force when squeezing).
+    """
+
+    width: float
+    grasp: bool
+    force: float
+
+
+@dataclass(frozen=True)
+class GripperState:
+    """Published on ``/<arm>/gripper_controller/state`` (a ``control_msgs/GripperCommand``
+    feedback in spirit).
+
+    Attributes:
+        stamp: simulated time [s].
+        width: measured opening between the finger pads [m].
+        target_width: where the fingers are going [m] (0 while closing).
+        force: force each finger presses with [N] (commanded; positive closes).
+        mode: what the gripper is doing.
+        holding: squeezing something that both finger pads touch.
+    """
+
+    stamp: float
+    width: float
+    target_width: float
+    force: float
+    mode: GripperMode
+    holding: bool
