@@ -11,17 +11,23 @@ import_quietly()
 
 from armfleet.arm import Arm
 from armfleet.bus import Bus
-from armfleet.errors import ArmfleetError
+from armfleet.errors import ArmfleetError, NameInUse, ObjectError, UnknownObject
 from armfleet.launch import launch
+from armfleet.gripper import Gripper
 from armfleet.messages import (
+    ArmMode,
     BringupEvent,
     BringupStage,
     ControllerState,
+    GripperCommand,
+    GripperMode,
+    GripperState,
     JointCommand,
     JointState,
     TFMessage,
     TransformStamped,
 )
+from armfleet.objects import WorldObject
 from armfleet.recording import (
     Recorder,
     Recording,
@@ -39,14 +45,21 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Arm",
+    "ArmMode",
     "ArmfleetError",
     "BringupEvent",
     "BringupStage",
     "Bus",
     "ControllerState",
     "FleetSpec",
+    "Gripper",
+    "GripperCommand",
+    "GripperMode",
+    "GripperState",
     "JointCommand",
     "JointState",
+    "NameInUse",
+    "ObjectError",
     "Recorder",
     "Recording",
     "RecordingError",
@@ -54,7 +67,9 @@ __all__ = [
     "SpecError",
     "TFMessage",
     "TransformStamped",
+    "UnknownObject",
     "World",
+    "WorldObject",
     "__version__",
     "connect",
     "launch",

@@ -138,6 +138,16 @@ class ArmBody:
         matrix[:3, 3] = state[4]
         return matrix
 
+    def set_friction(self, link_index: int, lateral: float, spinning: float) -> None:
+        """Friction coefficients of link ``link_index`` (Bullet multiplies those of a pair)."""
+        p.changeDynamics(
+            self.body_id,
+            link_index,
+            lateralFriction=lateral,
+            spinningFriction=spinning,
+            physicsClientId=self._client,
+        )
+
     def bodies_touching(self, link_index: int) -> set[int]:
         """PyBullet ids of the other bodies in contact with link ``link_index`` now."""
         points = p.getContactPoints(

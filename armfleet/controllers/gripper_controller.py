@@ -9,8 +9,9 @@ and writes their efforts:
   ``f = m a_ref + k (q_ref - q) + c (v_ref - v) + damping v``, clipped to the force limit;
 * closing: the same, towards width 0. A finger that falls more than
   ``block_distance_m`` behind its reference is blocked by something and from
-  then on presses with the grasp force. Fingers that reach their limit instead
-  have closed on nothing.
+  then on presses with the grasp force. Once both are blocked, a spring
+  (the same stiffness) keeps the pair where it closed, as the real gripper's
+  coupled fingers do. Fingers that reach their limit instead have closed on nothing.
 
 It holds something when both fingers press on the same body.
 """
@@ -73,6 +74,10 @@ class GripperController(Controller):
             "block_distance_m", 0.002, "lag behind the reference that means blocked", 1e-5, 0.1
         ),
         ParameterSpec("min_width_m", 0.002, "narrower than this, nothing is held [m]", 0.0, 0.1),
+        ParameterSpec("pad_friction", 1.0, "friction coefficient of the finger pads", 0.0, 10.0),
+        ParameterSpec(
+            "pad_spinning_friction_m", 0.005, "torsional friction of the finger pads", 0.0, 1.0
+        ),
     )
     writes_commands = True
 
@@ -94,6 +99,12 @@ class GripperController(Controller):
             raise ArmfleetError(f"{self.arm.name}: the model has no fingers for a gripper")
         self.finger_names = tuple(kinematics.joint_names[i] for i in self._fingers)
         self._links = [self.arm.body.joint_indices[i] for i in self._fingers]
+        for link in self._links:  # rubber pads
+            self.arm.body.set_friction(
+                link,
+                float(self.parameters["pad_friction"]),
+                float(self.parameters["pad_spinning_friction_m"]),
+            )
         self._lower = kinematics.lower[self._fingers]
         self._upper = kinematics.upper[self._fingers]
         #: Widest opening [m].
@@ -117,6 +128,7 @@ class GripperController(Controller):
         self._gain_damping = float(self.parameters["damping_n_s_m"])
         self.trajectory: JerkLimitedTrajectory | None = None
         self._blocked = np.zeros(n, dtype=bool)
+        self._offset_ref = np.zeros(n)
         self._grasp = False
         self._force = min(float(self.parameters["grasp_force_n"]), self.max_force)
         self._target_width = 0.0
@@ -231,16 +243,31 @@ class GripperController(Controller):
         assert trajectory is not None  # set by on_activate
         body = self.arm.body
         q, v = body.position[self._fingers], body.velocity[self._fingers]
-        if self._grasp:
+        if self._grasp and not self._blocked.all():
             self._blocked |= q - trajectory.position > self.parameters["block_distance_m"]
-        effort = (
-            self._mass * trajectory.acceleration
-            + self._stiffness * (trajectory.position - q)
-            + self._gain_damping * (trajectory.velocity - v)
-            + self._damping * v
-        )
-        effort[self._blocked] = -self._force
-        np.clip(effort, -self._force, self._force, out=self._effort)
+            if self._blocked.all():
+                self._offset_ref = q - q.mean()
+        if self._blocked.all():
+            # Squeezing: each finger presses with the grasp force, and a spring keeps
+            # the pair where it closed: independent fingers would let the object and
+            # the fingers slide together along the closing axis (the real gripper's
+            # fingers are coupled).
+            effort = (
+                -self._force
+                + self._stiffness * (self._offset_ref - (q - q.mean()))
+                - self._gain_damping * (v - v.mean())
+                + self._damping * v
+            )
+            np.clip(effort, -self.max_force, self.max_force, out=self._effort)
+        else:
+            effort = (
+                self._mass * trajectory.acceleration
+                + self._stiffness * (trajectory.position - q)
+                + self._gain_damping * (trajectory.velocity - v)
+                + self._damping * v
+            )
+            effort[self._blocked] = -self._force
+            np.clip(effort, -self._force, self._force, out=self._effort)
         body.effort_command[self._fingers] = self._effort
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(self._state_topic, self.gripper_state(stamp))
