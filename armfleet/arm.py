@@ -2,13 +2,28 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
+from armfleet.cartesian_path import LinearPathPlanner
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.controllers.gripper_controller import GripperController
 from armfleet.description import ArmDescription
-from armfleet.errors import ArmFault, NoGripper
+from armfleet.errors import (
+    ArmFault,
+    ArmInMotion,
+    NoGripper,
+    ProtectiveStopError,
+    UnknownFrame,
+    UnreachablePose,
+)
 from armfleet.gripper import Gripper
+from armfleet.inverse_kinematics import InverseKinematics, as_se3
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     ArmMode,
@@ -43,6 +58,7 @@ class Arm:
         state_publisher: RobotStatePublisher,
         safety: SafetySupervisor,
         gripper_controller: GripperController | None = None,
+        frame_pose: Callable[[str], FloatArray] | None = None,
     ) -> None:
         self._name = name
         self._pose = pose
@@ -58,6 +74,24 @@ class Arm:
         self.gripper_controller = gripper_controller
         self._gripper = (
             None if gripper_controller is None else Gripper(name, gripper_controller, bus)
+        )
+        #: World pose (4x4) of any frame the world knows, for Cartesian goals.
+        self._frame_pose = frame_pose
+        #: Inverse kinematics of this arm (its own Pinocchio data).
+        self.ik = InverseKinematics(kinematics)
+        controller = position_controller
+        self._linear = LinearPathPlanner(
+            name,
+            self.ik,
+            kinematics.arm_indices,
+            (
+                controller.lower,
+                controller.upper,
+                controller.max_velocity,
+                np.full(controller.lower.size, controller.parameters["max_acceleration_rad_s2"]),
+                np.full(controller.lower.size, controller.parameters["max_jerk_rad_s3"]),
+            ),
+            controller.period,
         )
 
     @property
@@ -150,8 +184,10 @@ class Arm:
         self.controller_manager.reset()
         self._safety.reset_stop(self)
 
-    def move_to(self, positions: Positions) -> None:
+    def move_to(self, positions: Positions) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
+
+        Returns the planned duration of the motion [s].
 
         The command goes out on ``/<name>/position_controller/commands``.
 
@@ -162,11 +198,94 @@ class Arm:
         values = self.position_controller.validate(positions)
         if self.controller_manager.fault is not None:
             raise ArmFault(self._name, self.controller_manager.fault)
-        self.position_controller.plan(values)
+        plan = self.position_controller.plan(values)
+        self._publish_command(values)
+        return plan.duration
+
+    def _publish_command(self, values: FloatArray) -> None:
         self._bus.publish(
             f"{self.namespace}/position_controller/commands",
             JointCommand(tuple(float(v) for v in values)),
         )
+
+    def solve_ik(
+        self,
+        pose: Any,
+        frame: str = "world",
+        *,
+        link: str = "tool0",
+        seed: Positions | None = None,
+    ) -> FloatArray:
+        """Arm joint positions (one per :attr:`joint_names`) that put ``link`` at ``pose``.
+
+        Args:
+            pose: 4x4 homogeneous matrix (or ``pinocchio.SE3``) of ``link`` in ``frame``.
+            frame: any frame of the world's TF tree (``world``, links, objects).
+            link: a frame of this arm, unprefixed (``tool0``) or prefixed (``bob_tool0``).
+            seed: first guess; the measured positions by default. The solution
+                nearest the seed is preferred (see :mod:`armfleet.inverse_kinematics`).
+
+        Raises:
+            UnreachablePose: with the residual; TargetPoseError, UnknownFrame,
+                TargetLengthError, JointLimitError (seed).
+        """
+        goal, link_frame = self._resolve(pose, frame, link)
+        start = self.body.position.copy()
+        if seed is not None:
+            start[self.kinematics.arm_indices] = self.position_controller.validate(seed)
+        solution = self.ik.solve(link_frame, goal, start)
+        if not solution.converged:
+            raise UnreachablePose(
+                self._name, link, solution.position_error_m, solution.rotation_error_rad
+            )
+        positions: FloatArray = solution.positions[self.kinematics.arm_indices].copy()
+        return positions
+
+    def move_to_pose(
+        self, pose: Any, frame: str = "world", *, link: str = "tool0", linear: bool = False
+    ) -> float:
+        """Move ``link`` to ``pose`` (in ``frame``); returns at once the planned duration [s].
+
+        With ``linear=True`` the link goes in a straight line from where it is
+        (its orientation turning about one axis), jerk-limited and within the
+        joint limits; the arm must be at rest. On any error nothing moves and
+        the current motion goes on.
+
+        Raises:
+            UnreachablePose, ArmInMotion, and the errors of :meth:`solve_ik` and
+            :meth:`move_to`.
+        """
+        if self.controller_manager.fault is not None:
+            raise ArmFault(self._name, self.controller_manager.fault)
+        controller = self.position_controller
+        if controller.stop_reason is not None:
+            raise ProtectiveStopError(self._name, controller.stop_reason)
+        if not linear:
+            return self.move_to(self.solve_ik(pose, frame, link=link))
+        if controller.is_moving or controller.trajectory is None:
+            raise ArmInMotion(self._name, "a linear move")
+        goal, link_frame = self._resolve(pose, frame, link)
+        start = self.body.position.copy()
+        start[self.kinematics.arm_indices] = controller.trajectory.position
+        motion = self._linear.plan(link_frame, link, start, goal)
+        controller.check_samples(motion)
+        self._publish_command(motion.position[-1])  # for the record; the samples replace it
+        controller.follow_samples(motion)
+        return motion.steps * controller.period
+
+    def _resolve(self, pose: Any, frame: str, link: str) -> tuple[pin.SE3, str]:
+        """The world pose wanted for ``link`` and the link's prefixed frame name."""
+        prefix = self.description.prefix
+        name = link if link.startswith(prefix) else prefix + link
+        if not self.kinematics.has_frame(name):
+            links = (n.removeprefix(prefix) for n in self.kinematics.link_names if n != "world")
+            raise UnknownFrame(link, f"links of {self._name}: {', '.join(sorted(links))}")
+        goal = as_se3(pose)
+        if frame != "world":
+            if self._frame_pose is None:
+                raise UnknownFrame(frame, "this arm has no frame resolver; give a world pose")
+            goal = pin.SE3(self._frame_pose(frame)) * goal
+        return goal, name
 
     def __repr__(self) -> str:
         return f"Arm({self._name!r}, model={self.model!r}, pose={self._pose})"

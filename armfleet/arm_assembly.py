@@ -94,8 +94,12 @@ def assemble_arm(
     on_fault: Callable[[str], None],
     parameters: ControllerOverrides,
     parameter_files: Mapping[str, Path],
+    frame_pose: Callable[[str], FloatArray] | None = None,
 ) -> Arm:
     """Load the body (brakes on, at ``start``) and configure its controllers.
+
+    ``frame_pose`` gives the world pose (4x4) of any frame the world knows
+    (e.g. ``world.tf.world_pose``): Cartesian goals may be given in them.
 
     Both parameter sets are validated before the arm is returned; on any error
     the body is removed again and the world is as it was.
@@ -136,5 +140,5 @@ def assemble_arm(
     publisher = RobotStatePublisher(name, kinematics, bus, stamp)
     return Arm(
         name, pose, description, body, kinematics, bus, manager, broadcaster, controller,
-        publisher, safety, gripper,
+        publisher, safety, gripper, frame_pose,
     )  # fmt: skip

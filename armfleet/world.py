@@ -226,6 +226,7 @@ class World:
             on_fault=lambda reason: self._publish_status(self._arms[name]),
             parameters=parameters or {},
             parameter_files=parameter_files or {},
+            frame_pose=self._tf.world_pose,
         )
         self._arms[name] = arm
         self._contacts.add_arm(name, arm.body)

@@ -1,4 +1,9 @@
-"""Jerk-limited joint motion with Ruckig, re-planned from the current reference state."""
+"""Jerk-limited joint motion with Ruckig, re-planned from the current reference state.
+
+Besides Ruckig's own motions, the reference can follow a sampled motion (one
+position, velocity and acceleration per period, e.g. a straight tool line);
+a stop or a new plan takes over from wherever that reference is.
+"""
 
 from __future__ import annotations
 
@@ -14,6 +19,25 @@ from armfleet.messages import FloatArray
 
 class TrajectoryError(ArmfleetError):
     """Ruckig could not plan a motion (it reports why)."""
+
+
+@dataclass(frozen=True)
+class SampledMotion:
+    """A reference given sample by sample, one row per period after the start.
+
+    Attributes:
+        position, velocity, acceleration: arrays (samples x joints); the last row
+            is the goal, at rest.
+    """
+
+    position: FloatArray
+    velocity: FloatArray
+    acceleration: FloatArray
+
+    @property
+    def steps(self) -> int:
+        """Number of periods it lasts."""
+        return int(self.position.shape[0])
 
 
 @dataclass(frozen=True)
@@ -60,15 +84,30 @@ class JerkLimitedTrajectory:
         self.velocity = np.zeros(dofs)
         self.acceleration = np.zeros(dofs)
         self._moving = False
+        self._samples: SampledMotion | None = None
+        self._sample_index = 0
 
     @property
     def moving(self) -> bool:
         return self._moving
 
-    def plan(self, target: FloatArray) -> MotionPlan:
-        """Plan from the current reference state to rest at ``target``, without following it."""
+    @property
+    def following_samples(self) -> bool:
+        """Whether the reference is following a :class:`SampledMotion`."""
+        return self._samples is not None
+
+    def plan(self, target: FloatArray, minimum_duration_s: float | None = None) -> MotionPlan:
+        """Plan from the current reference state to rest at ``target``, without following it.
+
+        Args:
+            target: joint positions [rad or m].
+            minimum_duration_s: take at least this long [s] (every joint still
+                starts and finishes together, within its limits).
+        """
         candidate = self._input_from_here(self._input.max_acceleration, self._input.max_jerk)
         candidate.target_position = [float(x) for x in target]
+        if minimum_duration_s is not None:
+            candidate.minimum_duration = float(minimum_duration_s)
         trajectory = ruckig.Trajectory(len(self.position))
         result = self._otg.calculate(candidate, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
@@ -93,6 +132,7 @@ class JerkLimitedTrajectory:
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot plan a stop: {result}")
         self._input = stopping
+        self._samples = None
         self._moving = True
         return float(trajectory.duration)
 
@@ -113,11 +153,21 @@ class JerkLimitedTrajectory:
     def follow(self, plan: MotionPlan) -> None:
         """Start following ``plan`` (made by :meth:`plan` from the current state)."""
         self._input = plan.input
+        self._samples = None
         self._moving = True
+
+    def follow_samples(self, motion: SampledMotion) -> None:
+        """Start following ``motion``: its first row is the reference one period from now."""
+        self._samples = motion
+        self._sample_index = 0
+        self._moving = motion.steps > 0
 
     def advance(self) -> None:
         """Move the reference one period along the planned motion."""
         if not self._moving:
+            return
+        if self._samples is not None:
+            self._advance_sample(self._samples)
             return
         result = self._otg.update(self._input, self._output)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
@@ -129,6 +179,18 @@ class JerkLimitedTrajectory:
         self.acceleration[:] = output.new_acceleration
         output.pass_to_input(self._input)
         if result == ruckig.Result.Finished:
+            self._moving = False
+            self.velocity[:] = 0.0
+            self.acceleration[:] = 0.0
+
+    def _advance_sample(self, motion: SampledMotion) -> None:
+        index = self._sample_index
+        self.position[:] = motion.position[index]
+        self.velocity[:] = motion.velocity[index]
+        self.acceleration[:] = motion.acceleration[index]
+        self._sample_index = index + 1
+        if self._sample_index >= motion.steps:
+            self._samples = None
             self._moving = False
             self.velocity[:] = 0.0
             self.acceleration[:] = 0.0

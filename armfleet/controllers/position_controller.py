@@ -184,6 +184,12 @@ class PositionController(Controller):
         Raises:
             ProtectiveStopError, ArmfleetError: not followed; the current motion goes on.
         """
+        self.check_samples(motion)
+        assert self.trajectory is not None  # check_samples() checked it
+        self.trajectory.follow_samples(motion)
+
+    def check_samples(self, motion: SampledMotion) -> None:
+        """Raise the error :meth:`follow_samples` would raise for ``motion``, if any."""
         if self.trajectory is None:
             raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
         if self.stop_reason is not None:
@@ -201,7 +207,6 @@ class PositionController(Controller):
                 f"{self.arm.name}: the sampled motion leaves the joint position, velocity or "
                 "acceleration limits"
             )
-        self.trajectory.follow_samples(motion)
 
     @property
     def protective_stop_enabled(self) -> bool:
