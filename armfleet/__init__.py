@@ -12,8 +12,8 @@ import_quietly()
 from armfleet.arm import Arm
 from armfleet.bus import Bus
 from armfleet.errors import ArmfleetError, NameInUse, ObjectError, UnknownObject
-from armfleet.launch import launch
 from armfleet.gripper import Gripper
+from armfleet.launch import launch
 from armfleet.messages import (
     ArmMode,
     BringupEvent,
