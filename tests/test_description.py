@@ -107,6 +107,7 @@ def test_shipped_models_are_the_shipped_files(models: ModelLibrary) -> None:
     )
     assert [f"{name}{XACRO_SUFFIX}" for name in models.names] == files
     assert {"panda", "ur5"} <= set(models.names)  # issue #2 asks for at least these
+    assert {"ur3", "ur10", "z1", "xarm7"} <= set(models.names)  # and issue #8 for these
 
 
 # -- every model, expanded -----------------------------------------------------------------

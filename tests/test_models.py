@@ -15,6 +15,7 @@ Tolerances:
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -254,3 +255,17 @@ def test_viewer_draws_every_visual(viewed: tuple[armfleet.World, SceneState], mo
     for node in nodes:
         assert mesh_bytes(scene, node) > 1000, node
         assert np.abs(scene.transforms[node] - expected[node]).max() < VIEWER_POSE_TOLERANCE
+
+
+# -- the README's table ---------------------------------------------------------------------
+
+
+def test_readme_table_lists_every_model_and_its_home() -> None:
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    rows = re.findall(r"^\| (\w+) \| `[^`]+` \| [^|]+ \| ([^|]+) \|", readme, flags=re.MULTILINE)
+    assert sorted(model for model, _ in rows) == MODEL_NAMES
+    library = ModelLibrary()
+    for model, home in rows:
+        if home.strip().startswith("`"):
+            written = tuple(float(v) for v in home.strip().strip("`").split())
+            assert written == library.expand(model, "bob_").home, model
