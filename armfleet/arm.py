@@ -13,6 +13,7 @@ from armfleet.bus import Bus
 from armfleet.cartesian_path import LinearPathPlanner
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.controllers.gripper_controller import GripperController
+from armfleet.controllers.jerk_limited_trajectory import MotionPlan
 from armfleet.description import ArmDescription
 from armfleet.errors import (
     ArmFault,
@@ -201,6 +202,12 @@ class Arm:
         plan = self.position_controller.plan(values)
         self._publish_command(values)
         return plan.duration
+
+    def start_plan(self, values: FloatArray, plan: MotionPlan) -> None:
+        """Follow ``plan`` to ``values``, made by ``position_controller.plan`` at this
+        step (e.g. with a minimum duration, by :meth:`armfleet.World.move_together`)."""
+        self._publish_command(values)  # for the record; the plan replaces its motion
+        self.position_controller.follow(plan)
 
     def _publish_command(self, values: FloatArray) -> None:
         self._bus.publish(

@@ -8,7 +8,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Future
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import pybullet as p
 
@@ -35,6 +35,7 @@ from armfleet.names import check_arm_name
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
+from armfleet.synchronised_motion import move_together
 from armfleet.tf_tree import TfTree
 
 if TYPE_CHECKING:
@@ -172,6 +173,22 @@ class World:
         if name not in self._arms:
             raise UnknownArm(name, list(self._arms))
         return self._arms[name]
+
+    def move_together(self, targets: Mapping[str, Positions | Any]) -> float:
+        """Move several arms so they start on the same step and finish at the same instant.
+
+        Args:
+            targets: per arm name, joint positions (one per ``arm.joint_names``)
+                or a 4x4 world pose of its tool0 (solved by IK).
+
+        Returns:
+            The common duration [s]: the longest of the arms' own fastest motions.
+
+        Raises:
+            ArmfleetError: an unknown arm or any bad target; then no arm moves.
+        """
+        self._check_open()
+        return move_together({name: (self.arm(name), t) for name, t in targets.items()})
 
     # -- bring-up ---------------------------------------------------------------------
     def spawn(
