@@ -11,7 +11,15 @@ import_quietly()
 
 from armfleet.arm import Arm
 from armfleet.bus import Bus
-from armfleet.errors import ArmfleetError, NameInUse, ObjectError, UnknownObject
+from armfleet.errors import (
+    ArmfleetError,
+    ArmInMotion,
+    NameInUse,
+    ObjectError,
+    TargetPoseError,
+    UnknownObject,
+    UnreachablePose,
+)
 from armfleet.gripper import Gripper
 from armfleet.launch import launch
 from armfleet.messages import (
@@ -45,6 +53,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Arm",
+    "ArmInMotion",
     "ArmMode",
     "ArmfleetError",
     "BringupEvent",
@@ -66,8 +75,10 @@ __all__ = [
     "SpawnPose",
     "SpecError",
     "TFMessage",
+    "TargetPoseError",
     "TransformStamped",
     "UnknownObject",
+    "UnreachablePose",
     "World",
     "WorldObject",
     "__version__",
