@@ -1,6 +1,9 @@
-"""Every step, the world's contacts that matter: between arms, an arm and itself, the floor.
+"""Every step, the world's contacts that matter: between arms, an arm and itself, the floor,
+and scene objects (body name = object name, link ``""``).
 
-Contacts ruled out at spawn (see :mod:`armfleet.collision_filter`) never appear.
+Contacts ruled out at spawn (see :mod:`armfleet.collision_filter`) never appear;
+nor do those between a static object and an arm's links that never move (an
+arm standing on a table).
 A report goes out on ``/collisions`` at each step with contacts, plus an empty
 one when they end. A contact between links that were not touching at the
 previous step, or one that has gone 2 mm deeper since first seen, is handed to
@@ -15,6 +18,7 @@ import pybullet as p
 
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
+from armfleet.collision_filter import rigid_groups
 from armfleet.messages import CollisionReport, Contact
 
 COLLISIONS_TOPIC = "/collisions"
@@ -46,15 +50,49 @@ class ContactMonitor:
         self._on_new_contact = on_new_contact
         self._touching: dict[tuple[str, str], float] = {}
         self._touching_bodies: dict[str, set[str]] = {}
+        self._arms: dict[int, ArmBody] = {}
+        self._static_objects: set[int] = set()
+        self._dynamic_objects: dict[int, str] = {}
         self.total_contacts = 0
         bus.advertise(COLLISIONS_TOPIC, CollisionReport)
 
     def add_arm(self, name: str, body: ArmBody) -> None:
         links = {index: link for link, index in ((n, body.link_index(n)) for n in body.link_names)}
         self._bodies[body.body_id] = (name, links)
+        self._arms[body.body_id] = body
+        for static in self._static_objects:
+            self._ignore_fixed_links(static, body)
 
     def remove_arm(self, body: ArmBody) -> None:
         self._bodies.pop(body.body_id, None)
+        self._arms.pop(body.body_id, None)
+
+    def add_object(self, name: str, body_id: int, *, static: bool) -> None:
+        """Report contacts of the scene object ``name`` (one PyBullet body, no links)."""
+        self._bodies[body_id] = (name, {-1: ""})
+        if static:
+            self._static_objects.add(body_id)
+            for arm in self._arms.values():
+                self._ignore_fixed_links(body_id, arm)
+        else:
+            self._dynamic_objects[body_id] = name
+
+    def remove_object(self, body_id: int) -> None:
+        self._bodies.pop(body_id, None)
+        self._static_objects.discard(body_id)
+        self._dynamic_objects.pop(body_id, None)
+
+    def is_dynamic_object(self, name: str) -> bool:
+        """Whether ``name`` is a scene object with a mass (arms may touch it freely)."""
+        return name in self._dynamic_objects.values()
+
+    def _ignore_fixed_links(self, static: int, arm: ArmBody) -> None:
+        """A static object and an arm's links that never move: nothing to report or solve."""
+        for link, group in rigid_groups(arm).items():
+            if group == -1:
+                p.setCollisionFilterPair(
+                    static, arm.body_id, -1, link, 0, physicsClientId=self._client
+                )
 
     @property
     def touching(self) -> dict[tuple[str, str], float]:
@@ -62,7 +100,7 @@ class ContactMonitor:
         return dict(self._touching)
 
     def touching_bodies(self, name: str) -> set[str]:
-        """Bodies (arm names, ``"ground"``) that ``name`` touched at the last step."""
+        """Bodies (arm and object names, ``"ground"``) that ``name`` touched at the last step."""
         return set(self._touching_bodies.get(name, ()))
 
     def scan(self, stamp: float) -> tuple[Contact, ...]:

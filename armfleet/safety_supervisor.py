@@ -3,6 +3,10 @@
 After ``reset_stop()`` an arm may move away from what it is touching: contacts
 with those bodies don't stop it again until they have separated once (unless
 it pushes 2 mm deeper). Any other new contact stops it again.
+
+Scene objects with a mass are what arms are for: touching, pushing or holding
+one never stops an arm. A static object (a table) is an obstacle like the
+floor. Contacts between objects, or with the floor, concern no arm.
 """
 
 from __future__ import annotations
@@ -44,8 +48,10 @@ class SafetySupervisor:
             arm = arms.get(name)
             if arm is None or (other in self._excused.get(name, ()) and not deeper):
                 continue
+            if self._monitor.is_dynamic_object(other):
+                continue
             touched = "itself" if other == name else other
-            links = f"{contact.link_a or 'ground'} / {contact.link_b or 'ground'}"
+            links = f"{contact.link_a or contact.body_a} / {contact.link_b or contact.body_b}"
             if arm.position_controller.protective_stop(f"touched {touched} ({links})"):
                 self.stops += 1
                 self._on_stop(arm)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -10,34 +11,48 @@ from armfleet.errors import UnknownFrame
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
 
+if TYPE_CHECKING:
+    from armfleet.objects import WorldObject
+
 WORLD_FRAME = "world"
 
 
 class TfTree:
-    """Looks up transforms from the arms' models at their latest measured state.
+    """Looks up transforms from the arms' models at their latest measured state,
+    and the scene objects' poses as measured after the last step.
 
     Args:
         arms: callable returning, per arm name, its kinematics and the current
             joint positions (read from the physics engine at the last step).
+        objects: callable returning the scene objects by name (frame ``<object>``).
     """
 
-    def __init__(self, arms: Callable[[], Mapping[str, tuple[ArmKinematics, FloatArray]]]) -> None:
+    def __init__(
+        self,
+        arms: Callable[[], Mapping[str, tuple[ArmKinematics, FloatArray]]],
+        objects: Callable[[], Mapping[str, WorldObject]] | None = None,
+    ) -> None:
         self._arms = arms
+        self._objects = objects
 
     def world_pose(self, frame: str) -> FloatArray:
         """4x4 pose of ``frame`` in ``world``."""
         if frame == WORLD_FRAME:
             return np.eye(4)
+        objects = self._objects() if self._objects is not None else {}
+        if frame in objects:
+            return objects[frame].pose
         arms = self._arms()
         for kinematics, positions in arms.values():
             if kinematics.has_frame(frame):
                 kinematics.update(positions)
                 return kinematics.world_pose(frame)
         names = ", ".join(sorted(arms)) or "none yet"
+        listed = ", ".join(sorted(objects)) or "none"
         raise UnknownFrame(
             frame,
-            f"frames are 'world' and the arms' prefixed links (arms: {names}; "
-            "e.g. <arm>_base_link, <arm>_tool0)",
+            f"frames are 'world', the arms' prefixed links (arms: {names}; "
+            f"e.g. <arm>_base_link, <arm>_tool0) and the objects ({listed})",
         )
 
     def lookup(self, target_frame: str, source_frame: str) -> FloatArray:

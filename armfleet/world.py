@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import builtins
 import logging
 import math
 import time
@@ -23,7 +24,7 @@ from armfleet.bringup import BRINGUP_TOPIC, bring_up
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.description import ModelLibrary
-from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
+from armfleet.errors import ArmfleetError, NameInUse, ObjectError, UnknownArm, WorldClosed
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     BringupEvent,
@@ -32,6 +33,14 @@ from armfleet.messages import (
     Positions,
 )
 from armfleet.names import check_arm_name
+from armfleet.objects import ObjectSet, WorldObject, object_spec
+from armfleet.objects.object_spec import (
+    DEFAULT_COLOR,
+    DEFAULT_FRICTION,
+    DEFAULT_MASS_KG,
+    DEFAULT_ROLLING_FRICTION_M,
+    DEFAULT_SPINNING_FRICTION_M,
+)
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
@@ -90,8 +99,9 @@ class World:
         self._arms: dict[str, Arm] = {}
         self._step_index = 0
         self._closed = False
-        self._tf = TfTree(self._arm_states)
+        self._tf = TfTree(self._arm_states, lambda: self._objects.objects)
         self._contacts = ContactMonitor(self._client, self._ground, self._bus, self._on_contact)
+        self._objects = ObjectSet(self._client, self._bus, self._contacts)
         self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
         self._requests = RequestQueue()
@@ -222,6 +232,7 @@ class World:
         """
         self._check_open()
         check_arm_name(name, self._arms)
+        self._check_name_free(name, "an object" if name in self._objects else "")
         pose = SpawnPose.from_values(at)
         check_controller_parameters(parameters or {}, parameter_files or {})
         description = self._models.expand(model, f"{name}_", pose)
@@ -273,6 +284,94 @@ class World:
         arm.body.remove()
         del self._arms[arm.name]
 
+    # -- objects ----------------------------------------------------------------------
+    @property
+    def objects(self) -> dict[str, WorldObject]:
+        """Scene objects by name, in the order they were added (a copy)."""
+        return self._objects.objects
+
+    def object(self, name: str) -> WorldObject:
+        """The scene object ``name``; :class:`armfleet.UnknownObject` lists the others."""
+        return self._objects.get(name)
+
+    def add_object(
+        self,
+        name: str,
+        shape: str,
+        *,
+        size: float | Sequence[float] | None = None,
+        mass: float = DEFAULT_MASS_KG,
+        friction: float = DEFAULT_FRICTION,
+        color: Sequence[float] = DEFAULT_COLOR,
+        at: Sequence[float] = (0.0, 0.0, 0.0),
+        rpy_deg: Sequence[float] = (0.0, 0.0, 0.0),
+        mesh: str | Path | None = None,
+        scale: float = 1.0,
+        spinning_friction: float = DEFAULT_SPINNING_FRICTION_M,
+        rolling_friction: float = DEFAULT_ROLLING_FRICTION_M,
+    ) -> WorldObject:
+        """Add a box, cylinder, sphere or mesh to the world; a table is a static box.
+
+        The object's frame (on ``/tf``, child of ``world``, named ``name``) is
+        the centre of a box, cylinder or sphere and the origin of a mesh file.
+
+        Args:
+            name: object name (``^[a-z][a-z0-9_]*$``), unique among arms and objects.
+            shape: ``"box"``, ``"cylinder"``, ``"sphere"`` or ``"mesh"``.
+            size: box (x, y, z) full extents; cylinder (radius, length), axis
+                along the object's z; sphere radius (a number or (r,)) [m].
+                None for a mesh (its file gives it).
+            mass: [kg]; 0 makes the object static, fixed in the world.
+            friction: lateral friction coefficient.
+            color: RGBA, each in [0, 1].
+            at: (x, y, z) of the object's frame [m].
+            rpy_deg: roll, pitch, yaw [deg] (R = Rz(yaw) Ry(pitch) Rx(roll)).
+            mesh: path of a .obj or .stl file (mesh only); a moving mesh
+                collides as its convex hull, a static one as it is.
+            scale: scale of the mesh file's coordinates (e.g. 0.001 for mm).
+            spinning_friction: torsional friction [m], keeps a held box from turning.
+            rolling_friction: rolling resistance [m].
+
+        Raises:
+            ArmfleetError: a bad argument or a name in use; the world is unchanged.
+        """
+        self._check_open()
+        spec = object_spec(
+            name,
+            shape,
+            size=size,
+            mass=mass,
+            friction=friction,
+            spinning_friction=spinning_friction,
+            rolling_friction=rolling_friction,
+            color=color,
+            at=at,
+            rpy_deg=rpy_deg,
+            mesh=mesh,
+            scale=scale,
+        )
+        kind = "an arm" if name in self._arms else ("an object" if name in self._objects else "")
+        self._check_name_free(name, kind)
+        for arm in self._arms.values():
+            if arm.kinematics.has_frame(name):
+                raise ObjectError(name, "name", f"already a frame of arm {arm.name}")
+        obj = self._objects.add(spec, self.time)
+        if self._viewer is not None:
+            self._viewer.add_object(obj)
+        return obj
+
+    def remove_object(self, name: str) -> None:
+        """Take object ``name`` out of the world: body, frame, contacts, viewer."""
+        self._check_open()
+        self._objects.get(name)
+        if self._viewer is not None:
+            self._viewer.remove_object(name)
+        self._objects.remove(name)
+
+    def _check_name_free(self, name: str, used_by: str) -> None:
+        if used_by:
+            raise NameInUse(name, used_by, list(self._arms), list(self._objects.objects))
+
     # -- stepping ---------------------------------------------------------------------
     def step(self) -> None:
         """Advance one physics step, as ros2_control's loop around the physics.
@@ -294,6 +393,7 @@ class World:
         self._step_index += 1
         for arm in arms:
             arm.body.read()
+        self._objects.after_step(self.time)
         self._contacts.scan(self.time)
         self._safety.after_scan()
         if self._step_index % self._status_period_steps == 0:
@@ -371,5 +471,5 @@ class World:
     def __enter__(self) -> World:
         return self
 
-    def __exit__(self, *exc: object) -> None:
+    def __exit__(self, *exc: builtins.object) -> None:  # World.object shadows the builtin
         self.close()

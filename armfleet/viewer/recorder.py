@@ -1,4 +1,5 @@
-"""Joint positions of every arm at a fixed rate of simulated time, for the replay.
+"""Joint positions of every arm (and the pose of every scene object) at a fixed rate of
+simulated time, for the replay.
 
 Recording stores one copy of each arm's joint positions per frame (9 floats
 for a Panda: 10 arms at 30 frames/s take ~80 MB per simulated hour).

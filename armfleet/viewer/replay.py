@@ -3,8 +3,9 @@
 The file needs no server: it holds MeshCat's ``main.min.js``, the commands
 that build the scene (taken from the viewer server) and one ``set_animation``
 command with a track set (position + quaternion per visual node, plus the
-``tool0`` landmark) for each arm. Identical mesh files, loaded once per arm
-in the live scene, are stored and parsed once, as in the live page.
+``tool0`` landmark) for each arm, and one for each scene object's node.
+Identical mesh files, loaded once per arm in the live scene, are stored and
+parsed once, as in the live page.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import umsgpack
 
 from armfleet.viewer.arm_visual import ArmVisual
 from armfleet.viewer.bridge import OWN_PAGE_FOLDER, meshcat_page_folder, share_mesh
+from armfleet.viewer.object_visual import ObjectVisual
 from armfleet.viewer.recorder import Track
 
 MESH_CACHE_SCRIPT = "armfleet-mesh-cache.js"
@@ -31,6 +33,14 @@ class RecordedArm:
     """An arm of the replay: its visual (node paths, kinematics) and its recording."""
 
     visual: ArmVisual
+    track: Track
+
+
+@dataclass(frozen=True)
+class RecordedObject:
+    """A scene object of the replay: its visual (node, local transform) and its poses."""
+
+    visual: ObjectVisual
     track: Track
 
 
@@ -112,20 +122,46 @@ def arm_animations(arm: RecordedArm, fps: float) -> list[dict[str, Any]]:
         ]
         animations.append({"path": path, "clip": {"fps": fps, "name": "default", "tracks": tracks}})
     if arm.track.first_frame > 0:  # spawned during the run: hidden until then
-        appear = {
-            "name": ".visible",
-            "type": "boolean",
-            "keys": [{"time": 0, "value": False}, {"time": arm.track.first_frame, "value": True}],
-        }
-        animations.append(
-            {"path": arm.visual.node, "clip": {"fps": fps, "name": "default", "tracks": [appear]}}
-        )
+        animations.append(_appear(arm.visual.node, arm.track.first_frame, fps))
     return animations
 
 
-def animation_command(arms: Sequence[RecordedArm], fps: float) -> bytes:
-    """One ``set_animation`` command holding every arm's animations, played once."""
+def _appear(node: str, first_frame: int, fps: float) -> dict[str, Any]:
+    """Hidden until ``first_frame``: for what came during the run."""
+    appear = {
+        "name": ".visible",
+        "type": "boolean",
+        "keys": [{"time": 0, "value": False}, {"time": first_frame, "value": True}],
+    }
+    return {"path": node, "clip": {"fps": fps, "name": "default", "tracks": [appear]}}
+
+
+def object_animations(recorded: RecordedObject, fps: float) -> list[dict[str, Any]]:
+    """MeshCat animation of one object's node (position + quaternion)."""
+    poses = recorded.track.array().reshape(-1, 4, 4)
+    if not len(poses):
+        return []
+    frames = np.arange(recorded.track.first_frame, recorded.track.first_frame + len(poses))
+    # The node's scale (a mesh's) stays as the scene set it; only its rotation is animated.
+    rotations = poses[:, :3, :3] @ recorded.visual.local_rotation
+    tracks = [
+        _track(".position", "vector3", frames, poses[:, :3, 3]),
+        _track(".quaternion", "quaternion", frames, quaternions_xyzw(rotations)),
+    ]
+    animations = [
+        {"path": recorded.visual.node, "clip": {"fps": fps, "name": "default", "tracks": tracks}}
+    ]
+    if recorded.track.first_frame > 0:
+        animations.append(_appear(recorded.visual.node, recorded.track.first_frame, fps))
+    return animations
+
+
+def animation_command(
+    arms: Sequence[RecordedArm], fps: float, objects: Sequence[RecordedObject] = ()
+) -> bytes:
+    """One ``set_animation`` command holding every arm's and object's animations, played once."""
     animations = [animation for arm in arms for animation in arm_animations(arm, fps)]
+    animations += [animation for obj in objects for animation in object_animations(obj, fps)]
     command = {
         "type": "set_animation",
         "path": "",
@@ -192,7 +228,11 @@ window.armfleetReplay = {info};
 
 
 def replay_html(
-    scene: Sequence[bytes], arms: Sequence[RecordedArm], fps: float, hidden: Sequence[bytes] = ()
+    scene: Sequence[bytes],
+    arms: Sequence[RecordedArm],
+    fps: float,
+    hidden: Sequence[bytes] = (),
+    objects: Sequence[RecordedObject] = (),
 ) -> str:
     """The replay page.
 
@@ -201,12 +241,19 @@ def replay_html(
         arms: the arms to animate, with their recordings.
         fps: frames per second of the recordings.
         hidden: extra commands applied after the scene (e.g. hiding live-only markers).
+        objects: the scene objects to animate, with their recordings.
     """
-    commands = [*_share_meshes(scene), *hidden, animation_command(arms, fps)]
+    commands = [*_share_meshes(scene), *hidden, animation_command(arms, fps, objects)]
     meshcat = (meshcat_page_folder() / "main.min.js").read_text(encoding="utf-8")
     mesh_cache = (OWN_PAGE_FOLDER / MESH_CACHE_SCRIPT).read_text(encoding="utf-8")
-    frames = max((a.track.first_frame + len(a.track.positions) for a in arms), default=0)
-    info = {"arms": [a.visual.name for a in arms], "frames": frames, "fps": fps}
+    tracks = [a.track for a in arms] + [o.track for o in objects]
+    frames = max((t.first_frame + len(t.positions) for t in tracks), default=0)
+    info = {
+        "arms": [a.visual.name for a in arms],
+        "objects": [o.visual.name for o in objects],
+        "frames": frames,
+        "fps": fps,
+    }
     return _PAGE.format(
         meshcat=meshcat,
         mesh_cache=mesh_cache,

@@ -28,11 +28,13 @@ from armfleet.viewer.errors import ViewerError
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
+    from armfleet.objects import WorldObject
     from armfleet.viewer.arm_visual import ArmVisual
     from armfleet.viewer.commands import Updates
     from armfleet.viewer.connection import BridgeConnection
     from armfleet.viewer.idle_refresher import IdleRefresher
     from armfleet.viewer.live_link import LiveLink
+    from armfleet.viewer.object_visual import ObjectVisual
     from armfleet.viewer.recorder import Recorder
     from armfleet.viewer.scene import Stage
     from armfleet.viewer.server import ViewerServer
@@ -118,6 +120,7 @@ class Viewer:
         self._link: LiveLink | None = None
         self._refresher: IdleRefresher | None = None
         self._visuals: dict[str, ArmVisual] = {}
+        self._objects: dict[str, ObjectVisual] = {}
         self._recorder: Recorder = Recorder()
         self._meshes: Any = _cached_mesh_loader()
         self._lock = threading.RLock()
@@ -185,6 +188,11 @@ class Viewer:
         return tuple(self._visuals)
 
     @property
+    def objects(self) -> tuple[str, ...]:
+        """Names of the scene objects shown."""
+        return tuple(self._objects)
+
+    @property
     def closed(self) -> bool:
         return self._closed
 
@@ -228,6 +236,40 @@ class Viewer:
                 self._link.wait(STALL_TIMEOUT_S)
                 self._visualizer[f"armfleet/{name}"].delete()
                 self._frame_camera()
+            except ViewerError as exc:
+                self._fail(str(exc))
+
+    # -- objects ------------------------------------------------------------------------
+    def add_object(self, obj: WorldObject) -> None:
+        """Draw ``obj`` under ``/meshcat/objects/<name>`` and follow it.
+
+        Never raises for viewer trouble: the object is then simply not shown.
+        """
+        if not self._live:
+            return
+        from armfleet.viewer.object_visual import ObjectVisual
+
+        try:
+            with self._lock:
+                self._objects[obj.name] = ObjectVisual(obj, self._visualizer)
+                self._recorder.add(obj.name)
+                self._frame_camera()
+        except ViewerError as exc:
+            self._fail(str(exc))
+        except (RuntimeError, ValueError, OSError) as exc:  # a mesh file MeshCat cannot take
+            logger.warning("viewer: cannot show %s: %s", obj.name, exc)
+
+    def remove_object(self, name: str) -> None:
+        """Remove object ``name`` from the scene (and from the replay)."""
+        with self._lock:
+            visual = self._objects.pop(name, None)
+            self._recorder.remove(name)
+            if visual is None or not self._live or self._link is None:
+                return
+            try:
+                self._link.discard(visual.node)
+                self._link.wait(STALL_TIMEOUT_S)
+                self._visualizer[f"objects/{name}"].delete()
             except ViewerError as exc:
                 self._fail(str(exc))
 
@@ -281,6 +323,8 @@ class Viewer:
 
     def _record(self, time_s: float) -> None:
         positions = {name: visual.arm.body.position for name, visual in self._visuals.items()}
+        for name, thing in self._objects.items():
+            positions[name] = thing.object.pose
         self._recorder.record(time_s, positions)
 
     def _display(self) -> None:
@@ -317,6 +361,8 @@ class Viewer:
         updates: Updates = {}
         for visual in self._visuals.values():
             visual.collect(updates)
+        for thing in self._objects.values():
+            thing.collect(updates)
         self._link.offer(updates)
         stalled_s = self._link.stalled_s
         if stalled_s > STALL_TIMEOUT_S:
@@ -336,20 +382,21 @@ class Viewer:
 
     # -- scene --------------------------------------------------------------------------
     def _frame_camera(self) -> None:
-        self._stage.frame([visual.bounds() for visual in self._visuals.values()])
+        bounds = [visual.bounds() for visual in self._visuals.values()]
+        self._stage.frame(bounds + [thing.bounds() for thing in self._objects.values()])
 
     def save(self, path: str | Path) -> Path:
         """Write a standalone HTML replay of the run so far (plays from ``file://``).
 
         The page holds the scene and a MeshCat animation with one track set
-        per arm shown now, at 30 frames per simulated second.
+        per arm and per object shown now, at 30 frames per simulated second.
 
         Raises:
             ViewerError: the viewer is not running, or the file cannot be written.
         """
         from armfleet.viewer.commands import property_command
         from armfleet.viewer.recorder import Track
-        from armfleet.viewer.replay import RecordedArm, replay_html
+        from armfleet.viewer.replay import RecordedArm, RecordedObject, replay_html
 
         if not self._live or self._connection is None:
             raise ViewerError(f"the viewer is not running ({self._error or 'closed'})")
@@ -365,11 +412,15 @@ class Viewer:
                 RecordedArm(visual, Track(tracks[name].first_frame, list(tracks[name].positions)))
                 for name, visual in self._visuals.items()
             ]
+            objects = [
+                RecordedObject(thing, Track(tracks[name].first_frame, list(tracks[name].positions)))
+                for name, thing in self._objects.items()
+            ]
             hidden = [
                 property_command(f"{visual.node}/targets", "visible", False)[1]
                 for visual in self._visuals.values()
             ]
-            html = replay_html(scene, arms, self._recorder.fps, hidden)
+            html = replay_html(scene, arms, self._recorder.fps, hidden, objects)
         try:
             target.write_text(html, encoding="utf-8")
         except OSError as exc:

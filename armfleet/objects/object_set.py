@@ -1,0 +1,89 @@
+"""The scene objects of one world: made, followed after each step, framed and removed.
+
+Names are checked here against each other; :class:`armfleet.World` checks them
+against its arms before calling :meth:`ObjectSet.add`.
+"""
+
+from __future__ import annotations
+
+from armfleet.bus import Bus
+from armfleet.contact_monitor import ContactMonitor
+from armfleet.errors import UnknownObject
+from armfleet.objects.object_frames import ObjectFramePublisher
+from armfleet.objects.object_spec import ObjectSpec
+from armfleet.objects.world_object import WorldObject
+
+
+class ObjectSet:
+    """Objects by name, in the order they were added.
+
+    Args:
+        client: PyBullet client id of the world.
+        bus: the world's bus (``/tf``, ``/tf_static``).
+        contacts: the world's contact monitor, told of every body.
+    """
+
+    def __init__(self, client: int, bus: Bus, contacts: ContactMonitor) -> None:
+        self._client = client
+        self._contacts = contacts
+        self._frames = ObjectFramePublisher(bus)
+        self._objects: dict[str, WorldObject] = {}
+        self._moving: tuple[WorldObject, ...] = ()
+        self._stamp = 0.0
+
+    @property
+    def objects(self) -> dict[str, WorldObject]:
+        """Objects by name (a copy)."""
+        return dict(self._objects)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._objects
+
+    def __len__(self) -> int:
+        return len(self._objects)
+
+    def get(self, name: str) -> WorldObject:
+        """The object ``name``; :class:`UnknownObject` lists the others."""
+        if name not in self._objects:
+            raise UnknownObject(name, list(self._objects))
+        return self._objects[name]
+
+    def add(self, spec: ObjectSpec, stamp: float) -> WorldObject:
+        """Make ``spec``'s body and frame at simulated time ``stamp`` [s] (name already checked)."""
+        obj = WorldObject(spec, self._client, on_teleport=self._teleported)
+        self._objects[obj.name] = obj
+        self._contacts.add_object(obj.name, obj.body_id, static=obj.is_static)
+        if obj.is_static:
+            self._frames.latch(obj, stamp)
+        self._update_moving()
+        return obj
+
+    def remove(self, name: str) -> WorldObject:
+        """Take object ``name`` out: frame, contacts, body. Returns it (removed)."""
+        obj = self.get(name)
+        self._frames.withdraw(name)
+        self._contacts.remove_object(obj.body_id)
+        obj.remove()
+        del self._objects[name]
+        self._update_moving()
+        return obj
+
+    def after_step(self, stamp: float) -> None:
+        """The world stepped to ``stamp`` [s]: poses are stale; moving frames go on ``/tf``."""
+        self._stamp = stamp
+        for obj in self._moving:
+            obj.stale()
+        if self._moving:
+            self._frames.publish(stamp, self._moving)
+
+    def clear(self) -> None:
+        """Remove every object."""
+        for name in list(self._objects):
+            self.remove(name)
+
+    def _teleported(self, obj: WorldObject) -> None:
+        if obj.is_static:
+            self._frames.latch(obj, self._stamp)
+
+    def _update_moving(self) -> None:
+        self._moving = tuple(o for o in self._objects.values() if not o.is_static)
