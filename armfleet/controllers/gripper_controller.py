@@ -127,12 +127,14 @@ class GripperController(Controller):
         self._stiffness = float(self.parameters["stiffness_n_m"])
         self._gain_damping = float(self.parameters["damping_n_s_m"])
         self.trajectory: JerkLimitedTrajectory | None = None
-        self._blocked = np.zeros(n, dtype=bool)
-        self._offset_ref = np.zeros(n)
+        self._blocked = [False] * n
+        self._offset_ref = [0.0] * n
+        self._mass_list: list[float] = self._mass.tolist()
+        self._damping_list: list[float] = self._damping.tolist()
         self._grasp = False
         self._force = min(float(self.parameters["grasp_force_n"]), self.max_force)
         self._target_width = 0.0
-        self._effort = np.zeros(n)
+        self._effort = [0.0] * n
         self._state_topic = self.arm.topic("gripper_controller/state")
         commands = self.arm.topic("gripper_controller/commands")
         self.arm.bus.advertise(commands, GripperCommand)
@@ -148,7 +150,7 @@ class GripperController(Controller):
         self.trajectory = JerkLimitedTrajectory(
             start, self.period, self._speed, self._acceleration, self._jerk
         )
-        self._blocked[:] = False
+        self._blocked = [False] * self._fingers.size
         self._grasp = False
         self._target_width = float(np.sum(start))
         self._position_controller.release(self._fingers)
@@ -186,7 +188,7 @@ class GripperController(Controller):
         self._grasp = command.grasp
         self._force = command.force
         self._target_width = width
-        self._blocked[:] = False
+        self._blocked = [False] * self._fingers.size
 
     def _on_command(self, command: GripperCommand) -> None:
         try:
@@ -207,7 +209,7 @@ class GripperController(Controller):
     @property
     def force(self) -> float:
         """Force the fingers press with now [N] (mean of their efforts, positive closing)."""
-        return float(-np.mean(self._effort))
+        return -sum(self._effort) / len(self._effort)
 
     @property
     def mode(self) -> GripperMode:
@@ -216,7 +218,7 @@ class GripperController(Controller):
             return GripperMode.MOVING if moving else GripperMode.AT_WIDTH
         if self.width <= self.parameters["min_width_m"] and not moving:
             return GripperMode.CLOSED
-        if self._blocked.all():
+        if all(self._blocked):
             return (
                 GripperMode.SQUEEZING
                 if self.width > self.parameters["min_width_m"]
@@ -239,36 +241,53 @@ class GripperController(Controller):
 
     # -- control ----------------------------------------------------------------------
     def update(self, stamp: float) -> None:
+        # Plain floats: with two fingers, numpy's per-call overhead would cost more
+        # than the arithmetic (this runs at 1 kHz on every Panda).
         trajectory = self.trajectory
         assert trajectory is not None  # set by on_activate
         body = self.arm.body
-        q, v = body.position[self._fingers], body.velocity[self._fingers]
-        if self._grasp and not self._blocked.all():
-            self._blocked |= q - trajectory.position > self.parameters["block_distance_m"]
-            if self._blocked.all():
-                self._offset_ref = q - q.mean()
-        if self._blocked.all():
+        q = body.position[self._fingers].tolist()
+        v = body.velocity[self._fingers].tolist()
+        k, c, force, blocked = self._stiffness, self._gain_damping, self._force, self._blocked
+        if self._grasp and not all(blocked):
+            lag = self.parameters["block_distance_m"]
+            for i, (q_i, q_ref) in enumerate(zip(q, trajectory.position.tolist(), strict=True)):
+                blocked[i] = blocked[i] or q_i - q_ref > lag
+            if all(blocked):
+                mean = sum(q) / len(q)
+                self._offset_ref = [q_i - mean for q_i in q]
+        if all(blocked):
             # Squeezing: each finger presses with the grasp force, and a spring keeps
             # the pair where it closed: independent fingers would let the object and
             # the fingers slide together along the closing axis (the real gripper's
             # fingers are coupled).
-            effort = (
-                -self._force
-                + self._stiffness * (self._offset_ref - (q - q.mean()))
-                - self._gain_damping * (v - v.mean())
-                + self._damping * v
-            )
-            np.clip(effort, -self.max_force, self.max_force, out=self._effort)
+            q_mean, v_mean, limit = sum(q) / len(q), sum(v) / len(v), self.max_force
+            effort = [
+                min(
+                    limit,
+                    max(-limit, -force + k * (ref - (q_i - q_mean)) - c * (v_i - v_mean) + d * v_i),
+                )
+                for q_i, v_i, ref, d in zip(q, v, self._offset_ref, self._damping_list, strict=True)
+            ]
         else:
-            effort = (
-                self._mass * trajectory.acceleration
-                + self._stiffness * (trajectory.position - q)
-                + self._gain_damping * (trajectory.velocity - v)
-                + self._damping * v
-            )
-            effort[self._blocked] = -self._force
-            np.clip(effort, -self._force, self._force, out=self._effort)
-        body.effort_command[self._fingers] = self._effort
+            effort = [
+                -force
+                if stuck
+                else min(force, max(-force, m * a + k * (x - q_i) + c * (u - v_i) + d * v_i))
+                for q_i, v_i, x, u, a, m, d, stuck in zip(
+                    q,
+                    v,
+                    trajectory.position.tolist(),
+                    trajectory.velocity.tolist(),
+                    trajectory.acceleration.tolist(),
+                    self._mass_list,
+                    self._damping_list,
+                    blocked,
+                    strict=True,
+                )
+            ]
+        self._effort = effort
+        body.effort_command[self._fingers] = effort
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(self._state_topic, self.gripper_state(stamp))
         trajectory.advance()
