@@ -6,6 +6,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from armfleet.arm import Arm
+from armfleet.objects import ObjectSpec, WorldObject
 from armfleet.spec import FleetSpec, load_spec
 from armfleet.spec.fleet_spec import ArmSpec
 from armfleet.world import World
@@ -23,6 +24,24 @@ def spawn_from_spec(world: World, arm: ArmSpec) -> Arm:
     )
 
 
+def add_from_spec(world: World, obj: ObjectSpec) -> WorldObject:
+    """Add one object of a spec to ``world``."""
+    return world.add_object(
+        obj.name,
+        obj.shape.value,
+        size=None if obj.mesh is not None else obj.size,
+        mass=obj.mass_kg,
+        friction=obj.friction,
+        spinning_friction=obj.spinning_friction_m,
+        rolling_friction=obj.rolling_friction_m,
+        color=obj.color,
+        at=obj.at,
+        rpy_deg=obj.rpy_deg,
+        mesh=obj.mesh,
+        scale=obj.scale,
+    )
+
+
 def launch(
     spec: FleetSpec | str | Path,
     *,
@@ -30,7 +49,7 @@ def launch(
     viewer_port: int | None = None,
     before_spawn: Callable[[World], None] | None = None,
 ) -> World:
-    """Create the spec's world and bring its arms up one at a time.
+    """Create the spec's world, bring its arms up one at a time, then add its objects.
 
     Args:
         spec: a spec, or a spec file (path or name of a shipped spec).
@@ -40,7 +59,7 @@ def launch(
             (e.g. to subscribe to ``/bringup``).
 
     Returns:
-        The world with every arm ready; close it when done.
+        The world with every arm ready and every object in place; close it when done.
     """
     if not isinstance(spec, FleetSpec):
         spec = load_spec(spec)
@@ -56,6 +75,8 @@ def launch(
             before_spawn(world)
         for arm in spec.arms:
             spawn_from_spec(world, arm)
+        for obj in spec.objects:
+            add_from_spec(world, obj)
     except BaseException:
         world.close()
         raise

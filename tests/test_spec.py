@@ -40,9 +40,11 @@ def test_shipped_spec_validates_and_runs(path: Path) -> None:
             expected = arm_spec.pose.matrix()
             base = world.tf.lookup("world", f"{arm_spec.name}_base_link")
             assert np.abs(base - expected).max() < 1e-9
+        assert list(world.objects) == [o.name for o in spec.objects]
         world.run(0.5)
         for arm in world.arms.values():
             assert arm.position_controller.is_holding, arm.name
+        assert world.safety.stops == 0, "no arm touches an object at its home pose"
     finally:
         world.close()
 
@@ -76,6 +78,7 @@ def spec_text(body: str) -> str:
 
 
 BOB = "  - name: bob\n    model: panda\n"
+BOX = "  - name: box\n    shape: box\n    size_m: [0.1, 0.1, 0.1]\n"
 BAD_SPECS = {
     "yaml syntax": ("world:\n\tdt_s: 0.001\n", 2, "not valid YAML"),
     "unknown top key": ("arm:\n" + BOB, 1, "did you mean 'arms'"),
@@ -101,7 +104,7 @@ BAD_SPECS = {
         "bob_panda_joint4 is outside its limits",
     ),
     "unknown controller": ("arms:\n" + BOB + "    controllers:\n      velocity_controller: {}\n",
-                           5, "valid keys: joint_state_broadcaster, position_controller"),
+                           5, "valid keys: " + ", ".join(sorted(CONTROLLER_TYPES))),
     "missing controller file": (
         "arms:\n" + BOB + "    controllers:\n      position_controller:\n"
         "        file: nope.yaml\n", 6, "shipped: ",
@@ -118,6 +121,25 @@ BAD_SPECS = {
                             2, "not a whole number"),
     "grid too dense": ("grid:\n  rows: 2\n  columns: 2\n  spacing_m: 0.1\n  model: panda\n", 4,
                        "bases must be >= 0.25 m apart"),
+    "object shape unknown": ("objects:\n" + BOX + "  - name: can\n    shape: cilinder\n", 6,
+                             "objects[1].shape: unknown shape 'cilinder'; "
+                             "valid: box, cylinder, sphere, mesh"),
+    "object size length": ("objects:\n  - name: box\n    shape: box\n    size_m: [1, 2]\n", 4,
+                           "objects[0].size_m: got 2 numbers; a box takes (x, y, z)"),
+    "object size without unit": ("objects:\n  - name: box\n    shape: box\n    size: 1\n", 4,
+                                 "did you mean 'size_m'"),
+    "object negative mass": ("objects:\n" + BOX + "    mass_kg: -2\n", 5,
+                             "objects[0].mass_kg: -2.0 is outside [0, 10000] kg"),
+    "object colour length": ("objects:\n" + BOX + "    color_rgba: [1, 0, 0]\n", 5,
+                             "expected 4 numbers, got 3"),
+    "object mesh missing": ("objects:\n  - name: cup\n    shape: mesh\n    mesh: cup.stl\n", 4,
+                            "objects[0].mesh: mesh file '/specs/cup.stl' not found"),
+    "object name twice": ("objects:\n" + BOX + BOX, 5, "objects[1].name: object name 'box' "
+                          "is used twice"),
+    "object named like an arm": ("arms:\n" + BOB + "objects:\n" + BOX.replace("box\n", "bob\n", 1),
+                                 5, "objects[0].name: name 'bob' is an arm's"),
+    "object name reserved": ("objects:\n" + BOX.replace("box\n", "world\n", 1), 2,
+                             "objects[0].name: reserved"),
 }  # fmt: skip
 
 
@@ -125,7 +147,7 @@ BAD_SPECS = {
 def test_bad_spec_gives_file_line_field_and_choices(case: str) -> None:
     text, line, expected = BAD_SPECS[case]
     with pytest.raises(SpecError) as raised:
-        parse_spec(text, "cell.yaml")
+        parse_spec(text, "cell.yaml", base_dir=Path("/specs"))
     message = str(raised.value)
     print(message)
     assert "\n" not in message
@@ -247,3 +269,65 @@ def test_problem_inside_a_controller_file_names_that_file_and_line(tmp_path: Pat
     message = str(raised.value)
     assert message.startswith(f"{spec}:4: arms[0].controllers: {params.resolve()}:3: ")
     assert "did you mean 'kd_s'" in message
+
+
+def test_mixed_cell_has_a_table_between_the_arms_clear_of_them() -> None:
+    spec = load_spec("mixed_cell")
+    (table,) = spec.objects
+    assert table.is_static and table.shape.value == "box"
+    picker, placer = (arm.pose.x for arm in spec.arms)
+    assert picker < table.at[0] < placer
+    with launch(spec, viewer=False) as world:
+        world.run(0.5)
+        assert world.contacts.touching == {}, "the arms at home touch nothing"
+        top = world.tf.lookup("world", "table")[2, 3] + table.size[2] / 2
+        assert top == pytest.approx(0.3)
+
+
+def test_spec_objects_launch_at_their_poses(tmp_path: Path) -> None:
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    corners = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+    obj_text = "".join(f"v {x * 40} {y * 40} {z * 20}\n" for x, y, z in corners)
+    obj_text += "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n"
+    (meshes / "block.obj").write_text(obj_text)
+    spec_file = tmp_path / "cell.yaml"
+    spec_file.write_text(
+        spec_text(
+            """
+            world: {viewer: false}
+            arms:
+              - {name: bob, model: panda}
+            objects:
+              - name: table
+                shape: box
+                size_m: [0.4, 0.6, 0.3]
+                mass_kg: 0
+                at_m: [0.65, 0, 0.15]
+              - {name: can, shape: cylinder, size_m: [0.03, 0.1], at_m: [0.6, 0.1, 0.35],
+                 mass_kg: 0.25, friction: 1.2, color_rgba: [0, 0, 1, 1]}
+              - {name: ball, shape: sphere, size_m: 0.02, at_m: [-0.5, 0, 0.02]}
+              - {name: block, shape: mesh, mesh: meshes/block.obj, scale: 0.001,
+                 at_m: [0.6, -0.1, 0.3], yaw_deg: 90, mass_kg: 0.05}
+            """
+        )
+    )
+    spec = load_spec(spec_file)
+    names = [o.name for o in spec.objects]
+    assert names == ["table", "can", "ball", "block"]
+    block = spec.objects[3]
+    assert block.mesh == (meshes / "block.obj").resolve()
+    assert block.size == pytest.approx((0.04, 0.04, 0.02))
+    with launch(spec) as world:
+        assert list(world.objects) == names
+        for obj in spec.objects:
+            pose = world.tf.lookup("world", obj.name)
+            assert np.abs(pose - obj.matrix()).max() < 1e-9, obj.name
+        can = world.object("can")
+        assert (can.mass, can.friction, can.color) == (0.25, 1.2, (0.0, 0.0, 1.0, 1.0))
+        world.run(0.5)
+        # The can and the block stand on the table's top (z = 0.3 m), the ball on the floor.
+        assert world.object("can").position[2] == pytest.approx(0.3 + 0.05, abs=1e-3)
+        assert world.object("ball").position[2] == pytest.approx(0.02, abs=1e-3)
+        assert world.object("block").position[2] == pytest.approx(0.3, abs=3e-3)
+        assert world.safety.stops == 0

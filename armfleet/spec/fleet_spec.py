@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from armfleet.objects.object_spec import ObjectSpec
 from armfleet.spawn_pose import SpawnPose
 
 
@@ -60,14 +61,16 @@ class WorldSpec:
 
 @dataclass(frozen=True)
 class FleetSpec:
-    """A world and the arms to bring up in it, in order.
+    """A world, the arms to bring up in it, in order, and the objects added after them.
 
     Attributes:
         world: world settings.
         arms: arms in bring-up order.
         source: where the spec came from (a file path or ``"command line"``).
+        objects: scene objects (tables, boxes, ...), added once every arm is ready.
     """
 
     world: WorldSpec = field(default_factory=WorldSpec)
     arms: tuple[ArmSpec, ...] = ()
     source: str = "<python>"
+    objects: tuple[ObjectSpec, ...] = ()

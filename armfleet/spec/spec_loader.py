@@ -21,6 +21,8 @@ Format (all keys but ``name`` and ``model`` optional; units in the key names)::
       origin_m: [0, 0, 0]
       yaw_deg: 0
       controllers: {...}
+    objects:                       # added after the arms; see armfleet.spec.object_entries
+      - {name: table, shape: box, size_m: [0.8, 0.6, 0.4], mass_kg: 0, at_m: [0.6, 0, 0.2]}
 """
 
 from __future__ import annotations
@@ -38,10 +40,11 @@ from armfleet.paths import data_dir
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
+from armfleet.spec.object_entries import read_objects
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 
-TOP_KEYS = ("world", "arms", "grid")
+TOP_KEYS = ("world", "arms", "grid", "objects")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
 ORIENTATION_KEYS = ("yaw_deg", "yaw_rad", "rpy_deg", "rpy_rad")
 ARM_KEYS = ("name", "model", "at_m", "initial_positions", "controllers", *ORIENTATION_KEYS)
@@ -98,7 +101,9 @@ def parse_spec(text: str, source: str, base_dir: Path | None = None) -> FleetSpe
         grid = reader.mapping(top["grid"], "grid", top.line_of("grid"))
         arms.extend(_grid(reader, grid, base_dir))
     check_fleet(reader, arms)
-    return FleetSpec(world, tuple(arm for arm, _, _ in arms), source)
+    names = {arm.name for arm, _, _ in arms}
+    objects = read_objects(reader, top, base_dir, names, _orientation)
+    return FleetSpec(world, tuple(arm for arm, _, _ in arms), source, objects)
 
 
 def _world(reader: SpecReader, top: LocatedDict) -> WorldSpec:
