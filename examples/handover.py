@@ -1,0 +1,184 @@
+"""Bob picks a bar from a table, hands it to toby in mid-air, and toby puts it on the mat.
+
+    python examples/handover.py                  # in the viewer (open the printed URL)
+    python examples/handover.py --no-viewer      # headless, prints the outcome
+    python examples/handover.py --runs 20        # 20 seeded runs, bar moved a little each time
+
+The scene is launch_specs/handover.yaml. Grasps are planned from the bar's pose
+on /tf (where it really is), so the bar may start anywhere near its spot.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import armfleet
+
+GRASP_FROM_CENTRE_M = 0.07  # bob holds the bar's -x end, toby its +x end
+HANDOVER_AT_M = (0.5, 0.0, 0.40)  # the bar's centre while it changes hands
+ABOVE_M = 0.10  # approach and leave every grasp from this high
+MAT_TO_BAR_CENTRE_M = 0.001 + 0.02  # half the mat + half the bar
+JITTER_M, JITTER_DEG = 0.02, 10.0  # random start of the bar in --runs
+TOLERANCE_M = 0.02
+
+
+def frame(xyz: tuple[float, float, float], yaw: float = 0.0) -> np.ndarray:
+    """4x4 pose at ``xyz`` [m], turned by ``yaw`` [rad] about z."""
+    pose = np.eye(4)
+    pose[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
+    pose[:3, 3] = xyz
+    return pose
+
+
+def grasp(bar: np.ndarray, end: int) -> np.ndarray:
+    """Gripper (tcp) pose holding ``bar`` at its ``end`` (-1 or +1), from above, facing it."""
+    tcp = np.diag([-end, end, -1.0, 1.0])  # z down, fingers closing across the bar
+    tcp[0, 3] = end * GRASP_FROM_CENTRE_M
+    return bar @ tcp
+
+
+def lifted(pose: np.ndarray, height: float = ABOVE_M) -> np.ndarray:
+    raised = pose.copy()
+    raised[2, 3] += height
+    return raised
+
+
+@dataclass
+class Watch:
+    """What is checked at every step between the pick and the place."""
+
+    picked: bool = False
+    placed: bool = False
+    steps_unheld: int = 0
+    arm_contacts: int = 0
+    lowest_bar_z_m: float = math.inf
+
+    def __call__(self, world: armfleet.World) -> None:
+        self.arm_contacts += "toby" in world.contacts.touching_bodies("bob")
+        if self.picked and not self.placed:
+            held = world.arm("bob").gripper.holding or world.arm("toby").gripper.holding
+            self.steps_unheld += not held
+            self.lowest_bar_z_m = min(self.lowest_bar_z_m, world.object("bar").position[2])
+
+
+def hand_over(world: armfleet.World, *, realtime: bool = False) -> Watch:
+    """Run the handover in ``world`` (launched from handover.yaml); return what was seen."""
+    bob, toby = world.arm("bob"), world.arm("toby")
+    watch = Watch()
+
+    def wait(seconds: float) -> None:
+        world.run(seconds, realtime=realtime, on_step=watch)
+
+    def go(arm: armfleet.Arm, pose: np.ndarray, linear: bool = False) -> None:
+        wait(arm.move_to_pose(pose, link="tcp", linear=linear) + 0.2)
+
+    def bar() -> np.ndarray:
+        return world.tf.lookup("world", "bar")
+
+    for arm in (bob, toby):
+        arm.gripper.open()
+    wait(0.5)
+    # Bob picks the bar up by its -x end.
+    pick = grasp(bar(), -1)
+    go(bob, lifted(pick))
+    go(bob, pick, linear=True)
+    bob.gripper.close()
+    wait(0.5)
+    watch.picked = bob.gripper.holding
+    go(bob, lifted(pick), linear=True)
+    # ...holds it out to toby (the bar along x, between them)...
+    bob_in_bar = np.linalg.solve(bar(), world.tf.lookup("world", "bob_tcp"))
+    go(bob, frame(HANDOVER_AT_M) @ bob_in_bar)
+    # ...toby takes it by the +x end, and bob lets go and steps back.
+    take = grasp(bar(), +1)
+    go(toby, lifted(take))
+    go(toby, take, linear=True)
+    toby.gripper.close()
+    wait(0.5)
+    bob.gripper.open()
+    wait(0.5)
+    go(bob, lifted(world.tf.lookup("world", "bob_tcp")), linear=True)
+    bob.move_to(bob.description.home)
+    # Toby puts the bar on the mat and steps back.
+    toby_in_bar = np.linalg.solve(bar(), world.tf.lookup("world", "toby_tcp"))
+    mat = world.tf.lookup("world", "mat")
+    place = lifted(mat, MAT_TO_BAR_CENTRE_M + 0.002) @ toby_in_bar
+    go(toby, lifted(place))
+    go(toby, place, linear=True)
+    watch.placed = True
+    toby.gripper.open()
+    wait(0.5)
+    go(toby, lifted(place), linear=True)
+    toby.move_to(toby.description.home)
+    wait(2.0)
+    return watch
+
+
+@dataclass(frozen=True)
+class Outcome:
+    seed: int
+    picked: bool  # bob held the bar after closing on it
+    error_m: float  # bar centre from the mat's centre, 2.1 cm up
+    steps_unheld: int
+    arm_contacts: int
+    stops: int
+
+    @property
+    def success(self) -> bool:
+        return (
+            self.picked
+            and self.error_m <= TOLERANCE_M
+            and self.steps_unheld == 0
+            and self.arm_contacts == 0
+            and self.stops == 0
+        )
+
+
+def run(seed: int, *, viewer: bool = False) -> Outcome:
+    """One handover with the bar moved by up to 2 cm / 10 deg from its spot (seed 0: not)."""
+    world = armfleet.launch("handover", viewer=viewer)
+    try:
+        rng = np.random.default_rng(seed)
+        x, y, z = world.object("bar").position
+        if seed:
+            dx, dy = rng.uniform(-JITTER_M, JITTER_M, 2)
+            yaw = rng.uniform(-JITTER_DEG, JITTER_DEG)
+            world.object("bar").set_pose((x + dx, y + dy, z), (0.0, 0.0, yaw))
+        if viewer and world.viewer is not None:
+            print(f"viewer: {world.viewer.url}")
+        watch = hand_over(world, realtime=viewer)
+        target = lifted(world.tf.lookup("world", "mat"), MAT_TO_BAR_CENTRE_M)[:3, 3]
+        error = float(np.linalg.norm(world.object("bar").position - target))
+        return Outcome(
+            seed, watch.picked, error, watch.steps_unheld, watch.arm_contacts, world.safety.stops
+        )
+    finally:
+        world.close()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--no-viewer", action="store_true", help="run headless")
+    parser.add_argument("--runs", type=int, default=0, help="seeded headless runs")
+    args = parser.parse_args()
+    if args.runs:
+        outcomes = [run(seed) for seed in range(args.runs)]
+        for o in outcomes:
+            print(
+                f"seed {o.seed:2d}: {'ok  ' if o.success else 'FAIL'} "
+                f"bar {o.error_m * 1000:5.1f} mm from target, unheld steps {o.steps_unheld}, "
+                f"arm contacts {o.arm_contacts}, stops {o.stops}"
+            )
+        wins = sum(o.success for o in outcomes)
+        print(f"success: {wins}/{len(outcomes)} ({100 * wins / len(outcomes):.0f} %)")
+    else:
+        outcome = run(0, viewer=not args.no_viewer)
+        print(outcome, "success" if outcome.success else "FAILED")
+
+
+if __name__ == "__main__":
+    main()
