@@ -413,3 +413,47 @@ def test_a_dead_server_stops_the_viewer_not_the_simulation(tmp_path: Path) -> No
         with pytest.raises(ViewerError, match="not running"):
             viewer.save(tmp_path / "run.html")
         assert isinstance(ViewerError("x"), armfleet.ArmfleetError)
+
+
+# -- scene objects ---------------------------------------------------------------------
+def test_objects_are_drawn_follow_the_physics_and_go_when_removed(tmp_path: Path) -> None:
+    with armfleet.World(viewer=True) as world:
+        viewer = viewer_of(world)
+        world.add_object("table", "box", size=(0.4, 0.6, 0.3), mass=0, at=(0.6, 0, 0.15))
+        can = world.add_object(
+            "can", "cylinder", size=(0.03, 0.1), at=(0.6, 0, 0.5), color=(0, 0, 1, 0.5)
+        )
+        world.run(0.01)  # a frame of the replay with the can still in the air
+        with SceneWatcher(viewer.port) as watcher:
+            scene = watcher.wait_quiet()
+            table = scene.objects["/meshcat/objects/table"]["object"]
+            (box,) = table["geometries"]
+            assert box["type"] == "BoxGeometry"
+            assert [box[k] for k in ("width", "height", "depth")] == [0.4, 0.6, 0.3]
+            can_object = scene.objects["/meshcat/objects/can"]["object"]
+            (cylinder,), (paint,) = can_object["geometries"], can_object["materials"]
+            assert (cylinder["type"], cylinder["height"]) == ("CylinderGeometry", 0.1)
+            assert (paint["color"], paint["opacity"], paint["transparent"]) == (0x0000FF, 0.5, True)
+            # MeshCat's cylinders stand along y: the node turns y onto the can's z.
+            node = scene.transforms["/meshcat/objects/can"]
+            assert np.abs(node[:3, 1] - can.pose[:3, 2]).max() < 1e-9
+            world.run(1.0)  # the can falls onto the table
+            assert can.position[2] == pytest.approx(0.35, abs=1e-3)
+            watcher.wait_for(
+                lambda s: abs(s.transforms["/meshcat/objects/can"][2, 3] - can.position[2]) < 1e-6
+            )
+            replay = viewer.save(tmp_path / "run.html")
+            world.remove_object("can")
+            watcher.wait_for(lambda s: "/meshcat/objects/can" not in s.objects)
+            assert "/meshcat/objects/table" in watcher.state.objects
+        assert viewer.objects == ("table",)
+    (animation,) = [c for c in replay_commands(replay) if c["type"] == "set_animation"]
+    clips = {a["path"]: a["clip"] for a in animation["animations"]}
+    tracks = {t["name"]: t for t in clips["/meshcat/objects/can"]["tracks"]}
+    heights = [key["value"][2] for key in tracks[".position"]["keys"]]
+    assert heights[0] == pytest.approx(0.5, abs=1e-3) and heights[-1] == pytest.approx(
+        0.35, abs=1e-3
+    )
+    quaternion = tracks[".quaternion"]["keys"][-1]["value"]
+    rotation = pin.Quaternion(np.array(quaternion)).toRotationMatrix()
+    assert np.abs(rotation[:, 1] - (0, 0, 1)).max() < 1e-3, "the can still stands in the replay"

@@ -129,6 +129,32 @@ SEEK_JS = f"""
 """
 
 
+# Per scene object under /meshcat/objects: its meshes and their colours (hex RGB).
+OBJECT_MESHES_JS = """
+(names) => {
+  const root = viewer.scene_tree.children["meshcat"];
+  const objects = root && root.children["objects"];
+  const found = {};
+  for (const name of names) {
+    const node = objects && objects.children[name];
+    const colors = [];
+    if (node) node.object.traverse((o) => {
+      if (o.isMesh) colors.push(o.material.color.getHex());
+    });
+    found[name] = colors;
+  }
+  return found;
+}
+"""
+OBJECTS_LOADED_JS = f"""
+(names) => {{
+  if (typeof viewer === "undefined" || !viewer.scene_tree) return false;
+  const found = ({OBJECT_MESHES_JS})(names);
+  return names.every((name) => found[name].length > 0);
+}}
+"""
+
+
 def ci_requires_browser() -> bool:
     return os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
 
@@ -296,5 +322,54 @@ def test_replay_plays_from_file(browser: Any, live: armfleet.World, tmp_path: Pa
         now = expected_visual_poses(live.arm("toby"))[paths[1]]
         assert np.abs(end[1] - now).max() < 1e-3, "the replay ends where toby is"
         assert_not_blank(screenshot(tab, "viewer_replay.png"))
+    finally:
+        tab.close()
+
+
+def test_objects_in_the_live_page_and_the_replay(browser: Any, tmp_path: Path) -> None:
+    cube = tmp_path / "cube.obj"
+    corners = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    cube.write_text(
+        "".join(f"v {x * 0.03} {y * 0.03} {z * 0.03}\n" for x, y, z in corners)
+        + "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n"
+    )
+    names = ["table", "can", "ball", "cube"]
+    with armfleet.World(viewer=True) as world:
+        assert world.viewer is not None, world.viewer_error
+        world.add_object(
+            "table", "box", size=(0.8, 0.6, 0.3), mass=0, at=(0, 0, 0.15), color=(1, 0, 0, 1)
+        )
+        can = world.add_object("can", "cylinder", size=(0.04, 0.12), at=(0.2, 0, 0.5))
+        world.add_object("ball", "sphere", size=0.05, at=(-0.2, 0, 0.5), color=(0, 1, 0, 1))
+        world.add_object("cube", "mesh", mesh=cube, at=(0, 0.15, 0.5), color=(0, 0, 1, 1))
+        world.run(1.0)  # everything falls onto the table
+        assert can.position[2] == pytest.approx(0.36, abs=1e-3)
+        world.viewer.refresh()
+        replay = world.viewer.save(tmp_path / "objects.html")
+        tab = browser.new_page(viewport={"width": VIEWPORT_WIDTH, "height": VIEWPORT_HEIGHT})
+        try:
+            tab.goto(world.viewer.url)
+            tab.wait_for_function(OBJECTS_LOADED_JS, arg=names, timeout=LOAD_TIMEOUT_MS)
+            colors = tab.evaluate(OBJECT_MESHES_JS, names)
+            assert colors["table"] == [0xFF0000] and colors["ball"] == [0x00FF00]
+            assert colors["cube"] == [0x0000FF]
+            (node,) = tab.evaluate(NODE_POSES_JS, ["/meshcat/objects/can"])
+            shown = as_matrix(node)
+            assert np.abs(shown[:3, 3] - can.position).max() < POSE_TOLERANCE
+            # MeshCat's cylinder axis (y) is turned onto the can's axis (z).
+            assert np.abs(shown[:3, 1] - can.pose[:3, 2]).max() < 1e-6
+            assert_not_blank(screenshot(tab, "viewer_objects.png"))
+        finally:
+            tab.close()
+    tab = browser.new_page(viewport={"width": VIEWPORT_WIDTH, "height": VIEWPORT_HEIGHT})
+    try:
+        tab.goto(replay.resolve().as_uri())
+        tab.wait_for_function(OBJECTS_LOADED_JS, arg=names, timeout=LOAD_TIMEOUT_MS)
+        tab.wait_for_function("() => viewer.animator.actions.length > 0")
+        path = ["/meshcat/objects/can"]
+        start = as_matrix(tab.evaluate(SEEK_JS, [0.0, path])[0])
+        end = as_matrix(tab.evaluate(SEEK_JS, [1.0, path])[0])
+        assert start[2, 3] == pytest.approx(0.5, abs=1e-3), "the can starts in the air"
+        assert end[2, 3] == pytest.approx(0.36, abs=1e-3), "and ends on the table"
     finally:
         tab.close()
