@@ -329,3 +329,21 @@ def test_names_are_unique_across_arms_and_objects(world: armfleet.World) -> None
     assert list(world.objects) == ["box"] and list(world.arms) == ["bob"]
     with pytest.raises(armfleet.UnknownObject, match="no object named 'bx'; objects: box"):
         world.remove_object("bx")
+
+
+def test_a_recording_carries_the_objects_frames(world: armfleet.World, tmp_path: Path) -> None:
+    add_table(world)
+    box = world.add_object("box", "box", size=(0.05, 0.05, 0.05), at=(0.6, 0.0, 0.6))
+    with world.record(tmp_path / "run.mcap", topics=["/tf", "/tf_static"]):
+        world.run(0.5)
+    recording = armfleet.open_recording(tmp_path / "run.mcap")
+    frames = {
+        (t["header"]["frame_id"], t["child_frame_id"]): (m.topic, t["transform"]["translation"])
+        for m in recording.messages(["/tf", "/tf_static"])
+        for t in m.data["transforms"]
+    }
+    assert frames[("world", "table")][0] == "/tf_static"
+    topic, last = frames[("world", "box")]
+    assert topic == "/tf"
+    assert abs(last["z"] - box.position[2]) < 1e-9
+    assert abs(last["z"] - (TABLE_TOP_M + 0.025)) < REST_TOLERANCE_M
