@@ -7,12 +7,20 @@ frame error ``log6(oMf^-1 oMdes)`` in the frame's own axes and the step
     dq = J^T (J J^T + lambda I)^-1 e,    J = -Jlog6 J_local,    lambda = 1e-6 + 1e-2 |e|^2
 
 (the damping fades as the error does, so the last iterations are Gauss-Newton),
-limited to ``max_step_rad`` per joint and clamped to the joint limits. The seed
-is tried first, so a reachable pose near the seed gives the solution near it;
-only if that attempt fails are up to ``max_restarts`` random in-limit
-configurations tried (drawn from a generator seeded per call: a solve is
-deterministic). An attempt gives up when its error has not halved for 10
-iterations.
+limited to ``max_step_rad`` per joint and clamped to the joint limits. A
+redundant arm (more than 6 joints) also moves in the task's null space
+``(I - J^+ J)`` away from any joint within 10 % of its range from a limit
+(while the error is above 0.1 mm or mrad: damping makes that step not quite
+null, so it stops for the last iterations), so
+that a sequence of warm-started solves (a straight line) does not run a joint
+into its limit when the other joints could make way. The seed
+is tried first, so a reachable pose near the seed gives the solution near it.
+Only if that attempt fails (DLS cannot cross a singularity, e.g. a UR's elbow
+from bent one way to the other) are up to ``max_restarts`` random in-limit
+configurations tried, the k-th within ``k * restart_spread_rad`` of the seed
+in each joint, so that nearer solutions come first (drawn from a generator
+seeded per call: a solve is deterministic). An attempt gives up when its error
+has not halved for 10 iterations.
 """
 
 from __future__ import annotations
@@ -30,6 +38,8 @@ from armfleet.messages import FloatArray
 #: Orthonormality and last-row tolerance of a 4x4 pose given by a user.
 POSE_TOLERANCE = 1e-6
 _STALL_ITERATIONS = 10
+#: Below this error [m or rad] the null-space push stops, so the last iterations converge.
+_NULL_SPACE_ERROR = 1e-4
 
 
 def as_se3(pose: Any) -> pin.SE3:
@@ -92,6 +102,7 @@ class InverseKinematics:
         max_iterations: per attempt.
         max_restarts: random restarts after a failed seeded attempt.
         max_step_rad: largest change of one joint in one iteration [rad or m].
+        restart_spread_rad: growth of the restarts' distance from the seed [rad or m].
     """
 
     def __init__(
@@ -103,6 +114,7 @@ class InverseKinematics:
         max_iterations: int = 60,
         max_restarts: int = 20,
         max_step_rad: float = 0.5,
+        restart_spread_rad: float = 0.25,
     ) -> None:
         self._model = kinematics.model
         self._data = self._model.createData()
@@ -114,6 +126,9 @@ class InverseKinematics:
         self.max_iterations = max_iterations
         self.max_restarts = max_restarts
         self.max_step_rad = max_step_rad
+        self.restart_spread_rad = restart_spread_rad
+        self._redundant = self._arm.size > 6
+        self._margin = 0.1 * (self._upper - self._lower)
 
     def frame_pose(self, frame: str, q: FloatArray) -> pin.SE3:
         """World pose of ``frame`` at configuration ``q`` (every movable joint)."""
@@ -140,7 +155,11 @@ class InverseKinematics:
         while not best[1] and restarts and tries < self.max_restarts:
             tries += 1
             start = np.array(seed, dtype=float)
-            start[self._arm] = generator.uniform(self._lower, self._upper)
+            spread = tries * self.restart_spread_rad
+            start[self._arm] = generator.uniform(
+                np.maximum(start[self._arm] - spread, self._lower),
+                np.minimum(start[self._arm] + spread, self._upper),
+            )
             result = self._attempt(frame_id, target, start)
             iterations += result[4]
             if result[1] or result[2] + result[3] < best[2] + best[3]:
@@ -178,9 +197,22 @@ class InverseKinematics:
             jacobian = pin.getFrameJacobian(model, data, frame_id, pin.ReferenceFrame.LOCAL)
             jacobian = -pin.Jlog6(frame_to_target.inverse()) @ jacobian[:, arm]
             damping = 1e-6 + 1e-2 * squared
-            step = -jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping * np.eye(6), error)
+            inverse = jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + damping * np.eye(6))
+            step = -inverse @ error
+            if self._redundant and squared > _NULL_SPACE_ERROR**2:
+                step += self._limit_avoidance(q[arm], inverse @ jacobian)
             largest = float(np.abs(step).max())
             if largest > self.max_step_rad:
                 step *= self.max_step_rad / largest
             q[arm] = np.clip(q[arm] + step, self._lower, self._upper)
         return q, False, position_error, rotation_error, iteration
+
+    def _limit_avoidance(self, q: FloatArray, projector: FloatArray) -> FloatArray:
+        """A null-space step pushing joints near a limit back towards their range [rad]."""
+        low = np.maximum(self._lower + self._margin - q, 0.0)
+        high = np.maximum(q - (self._upper - self._margin), 0.0)
+        push = (low - high) / self._margin
+        if not push.any():
+            return np.zeros_like(q)
+        null_step: FloatArray = 0.1 * (push - projector @ push)
+        return null_step
