@@ -30,3 +30,21 @@ def test_fleet_benchmark_short_mode_writes_every_field(tmp_path: Path) -> None:
     assert 0 < tracking["armfleet_max_error_rad"] < 1e-3
     assert tracking["position_control_max_error_rad"] > 0
     assert "c/a" in result.stdout and "tracking" in result.stdout
+
+
+def test_ik_benchmark_short_mode_reports_every_model(tmp_path: Path) -> None:
+    out = tmp_path / "ik.json"
+    result = subprocess.run(
+        [sys.executable, str(BENCHMARKS / "ik.py"), "--short", "--json", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
+    figures = json.loads(out.read_text())
+    from armfleet.description import ModelLibrary
+
+    assert [row["model"] for row in figures["models"]] == ModelLibrary().names
+    for row in figures["models"]:
+        assert row["poses"] == 10 and row["success_rate"] >= 0.8  # 10/10 on every model so far
+        assert 0 < row["median_ms"] <= row["p95_ms"] <= row["max_ms"]
+        assert row["model"] in result.stdout
