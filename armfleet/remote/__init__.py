@@ -17,18 +17,21 @@ from armfleet.remote.errors import (
     UnknownTopic,
 )
 from armfleet.remote.remote_arm import RemoteArm
+from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.remote.remote_subscription import RemoteSubscription
 from armfleet.remote.run_state import RunState
 from armfleet.remote.server import WorldServer, serve
-from armfleet.remote.world_info import TopicInfo, WorldInfo
+from armfleet.remote.world_info import ObjectInfo, TopicInfo, WorldInfo
 
 __all__ = [
     "Client",
     "ConnectionLost",
     "NoWorldFound",
+    "ObjectInfo",
     "ProtocolError",
     "RemoteArm",
     "RemoteError",
+    "RemoteGripper",
     "RemoteSubscription",
     "RequestTimeout",
     "RunState",

@@ -23,7 +23,7 @@ from armfleet.remote.remote_arm import RemoteArm
 from armfleet.remote.remote_subscription import RemoteSubscription
 from armfleet.remote.request_channel import RequestChannel
 from armfleet.remote.stream_receiver import StreamReceiver
-from armfleet.remote.world_info import TopicInfo, WorldInfo
+from armfleet.remote.world_info import ObjectInfo, TopicInfo, WorldInfo
 from armfleet.spawn_pose import SpawnPose
 
 #: Wait for most requests [s].
@@ -122,6 +122,64 @@ class Client:
     def remove(self, name: str) -> None:
         """Take the arm ``name`` out of the world."""
         self.call("remove", {"name": name})
+
+    def move_together(self, targets: Mapping[str, Positions]) -> float:
+        """Start several arms on the same step so that they finish at the same instant.
+
+        Args:
+            targets: per arm name, joint positions (one per ``arm.joint_names``) [rad or m].
+
+        Returns:
+            The common duration [s].
+
+        Raises:
+            RemoteError: an unknown arm or any bad target; then no arm moves.
+        """
+        args = {"targets": {name: _floats(values) for name, values in targets.items()}}
+        return float(self.call("move_together", args)["duration_s"])
+
+    # -- objects ----------------------------------------------------------------------
+    @property
+    def objects(self) -> dict[str, ObjectInfo]:
+        """Scene objects by name, in the order they were added, where they are now."""
+        return {d["name"]: ObjectInfo.from_wire(d) for d in self.call("objects")}
+
+    def add_object(
+        self,
+        name: str,
+        shape: str,
+        *,
+        size: float | Sequence[float],
+        mass: float | None = None,
+        friction: float | None = None,
+        color: Sequence[float] | None = None,
+        at: Sequence[float] = (0.0, 0.0, 0.0),
+        rpy_deg: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> ObjectInfo:
+        """Add a box, cylinder or sphere, as :meth:`armfleet.World.add_object` does (a
+        mesh names a file on the world's machine: add it there).
+
+        Args:
+            size: box (x, y, z) full extents; cylinder (radius, length); sphere radius [m].
+            mass: [kg] (the world's default if None); 0 makes it static, like a table.
+            at: (x, y, z) of its frame [m]; rpy_deg: roll, pitch, yaw [deg].
+        """
+        args: dict[str, Any] = {
+            "name": name,
+            "shape": shape,
+            "size": size if isinstance(size, int | float) else _floats(size),
+            "at": _floats(at),
+            "rpy_deg": _floats(rpy_deg),
+        }
+        optional = {"mass": mass, "friction": friction}
+        args |= {key: value for key, value in optional.items() if value is not None}
+        if color is not None:
+            args["color"] = _floats(color)
+        return ObjectInfo.from_wire(self.call("add_object", args))
+
+    def remove_object(self, name: str) -> None:
+        """Take the object ``name`` out of the world."""
+        self.call("remove_object", {"name": name})
 
     # -- topics -----------------------------------------------------------------------
     def topics(self) -> dict[str, TopicInfo]:

@@ -6,9 +6,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from armfleet.errors import ArmfleetError
+from armfleet.errors import ArmfleetError, NoGripper
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
 from armfleet.remote.codec import decode_message
+from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.spawn_pose import SpawnPose
 
 if TYPE_CHECKING:
@@ -35,6 +36,8 @@ class RemoteArm:
         self._joint_names = tuple(description["joint_names"])
         self._lower = np.asarray(description["lower"], dtype=float)
         self._upper = np.asarray(description["upper"], dtype=float)
+        gripper = description.get("gripper")
+        self._gripper = None if gripper is None else RemoteGripper(client, self._name, gripper)
 
     @property
     def name(self) -> str:
@@ -62,6 +65,21 @@ class RemoteArm:
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
         """(lower, upper) position limits of :attr:`joint_names` [rad or m]."""
         return self._lower.copy(), self._upper.copy()
+
+    @property
+    def gripper(self) -> RemoteGripper:
+        """The fingers: ``open()``, ``close(force)``, ``move_to(width)``, ``wait()``, ``width``.
+
+        Raises:
+            NoGripper: the model has no fingers.
+        """
+        if self._gripper is None:
+            raise NoGripper(self._name, self._model)
+        return self._gripper
+
+    @property
+    def has_gripper(self) -> bool:
+        return self._gripper is not None
 
     @property
     def joint_state(self) -> JointState:
@@ -95,6 +113,28 @@ class RemoteArm:
         """
         self._client.call("move", {"name": self._name, "positions": self._vector(positions)})
 
+    def move_to_pose(
+        self, pose: Any, frame: str = "world", *, link: str = "tool0", linear: bool = False
+    ) -> float:
+        """Move ``link`` to ``pose`` in ``frame``; returns, once the world has accepted the
+        goal, the planned duration [s].
+
+        Args:
+            pose: a 4x4 homogeneous matrix, or ``(x, y, z)`` [m] to keep the link's
+                current orientation (as seen from ``frame``).
+            frame: a frame of the world's TF tree (``world``, ``toby_tool0``, an object).
+            link: the arm's link to place, unprefixed or prefixed.
+            linear: follow a straight line from where the link is (from rest).
+
+        Raises:
+            RemoteError: the world refused it (``UnreachablePose``, ``ArmInMotion``,
+                ``UnknownFrame``...); nothing moved and the current motion goes on.
+        """
+        values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")
+        key = "position" if np.ndim(pose) == 1 else "pose"
+        args = {"name": self._name, key: values, "frame": frame, "link": link, "linear": linear}
+        return float(self._client.call("move_pose", args)["duration_s"])
+
     def wait(self, timeout: float = WAIT_TIMEOUT_S) -> JointState:
         """Block until the motion is over and the arm holds its target; return its state.
 
@@ -120,14 +160,13 @@ class RemoteArm:
         description: dict[str, Any] = self._client.call("arm", {"name": self._name})
         return description
 
-    def _vector(self, positions: Positions) -> list[float]:
+    def _vector(self, positions: Positions | Any, problem: str | None = None) -> list[float]:
         try:
             values: list[float] = np.asarray(positions, dtype=float).reshape(-1).tolist()
         except (TypeError, ValueError):
-            raise ArmfleetError(
-                f"{self._name}: targets must be numbers, one per joint: "
-                f"{', '.join(self._joint_names)}"
-            ) from None
+            joints = ", ".join(self._joint_names)
+            problem = problem or f"targets must be numbers, one per joint: {joints}"
+            raise ArmfleetError(f"{self._name}: {problem}") from None
         return values
 
     def __repr__(self) -> str:

@@ -256,8 +256,11 @@ class WorldServer:
         elif service is Service.WAIT:
             name = args.text("name")
             duration = args.number("timeout_s", timeout, low=0.0, high=MAX_REQUEST_TIMEOUT_S)
-            check = self._services.wait_check(name)
-            self._pending.wait(peer, request_id, check, duration, f"{name} is still moving")
+            if args.flag("gripper", False):
+                check, what = self._services.gripper_wait_check(name), f"{name}'s gripper"
+            else:
+                check, what = self._services.wait_check(name), name
+            self._pending.wait(peer, request_id, check, duration, f"{what} is still moving")
         else:
             work = self._services.prepare(service, args)
             assert work is not None  # every other service is plain

@@ -21,6 +21,8 @@ from armfleet.messages import ArmMode, JointCommand
 from armfleet.remote.arguments import Arguments
 from armfleet.remote.codec import to_wire
 from armfleet.remote.errors import UnknownService, UnknownTopic
+from armfleet.remote.manipulation_services import ManipulationServices, describe_gripper
+from armfleet.remote.object_services import ObjectServices
 from armfleet.remote.protocol import Service, armfleet_version
 from armfleet.remote.run_state import RunState
 from armfleet.remote.subscription_queue import SubscriptionQueue
@@ -43,7 +45,10 @@ FIELDS: dict[Service, tuple[str, ...]] = {
     Service.SPAWN: ("name", "model", "at", "initial_positions", "parameters"),
     Service.REMOVE: ("name",),
     Service.MOVE: ("name", "positions"),
-    Service.WAIT: ("name", "timeout_s"),
+    Service.MOVE_POSE: ("name", "pose", "position", "frame", "link", "linear"),
+    Service.MOVE_TOGETHER: ("targets",),
+    Service.GRIP: ("name", "action", "width", "force"),
+    Service.WAIT: ("name", "timeout_s", "gripper"),
     Service.RESET: ("name", "stop_only"),
     Service.TOPICS: (),
     Service.SUBSCRIBE: ("topic", "stream", "sub", "rate_hz", "queue_size"),
@@ -52,6 +57,9 @@ FIELDS: dict[Service, tuple[str, ...]] = {
     Service.PAUSE: (),
     Service.RESUME: (),
     Service.STEP: ("count",),
+    Service.OBJECTS: (),
+    Service.ADD_OBJECT: ("name", "shape", "size", "mass", "friction", "color", "at", "rpy_deg"),
+    Service.REMOVE_OBJECT: ("name",),
 }
 #: Simulated time an arm may take to settle on its target once its motion ended [s].
 SETTLE_S = 0.5
@@ -72,6 +80,9 @@ class WorldServices:
         self._world = world
         self._run_state = run_state
         self.address = address
+        manipulation, objects = ManipulationServices(world), ObjectServices(world)
+        #: ``wait``'s check for a gripper (the arm's is :meth:`wait_check`).
+        self.gripper_wait_check = manipulation.gripper_wait_check
         self._plain: dict[Service, Callable[[Arguments], Work]] = {
             Service.INFO: self.prepare_info,
             Service.ARMS: self.prepare_arms,
@@ -80,12 +91,18 @@ class WorldServices:
             Service.SPAWN: self.prepare_spawn,
             Service.REMOVE: self.prepare_remove,
             Service.MOVE: self.prepare_move,
+            Service.MOVE_POSE: manipulation.prepare_move_pose,
+            Service.MOVE_TOGETHER: manipulation.prepare_move_together,
+            Service.GRIP: manipulation.prepare_grip,
             Service.RESET: self.prepare_reset,
             Service.TOPICS: self.prepare_topics,
             Service.PUBLISH: self.prepare_publish,
             Service.PAUSE: self.prepare_pause,
             Service.RESUME: self.prepare_resume,
             Service.STEP: self.prepare_step,
+            Service.OBJECTS: objects.prepare_objects,
+            Service.ADD_OBJECT: objects.prepare_add_object,
+            Service.REMOVE_OBJECT: objects.prepare_remove_object,
         }
 
     def prepare(self, service: Service, args: Arguments) -> Work | None:
@@ -307,6 +324,7 @@ def describe_arm(world: World, arm: Arm) -> dict[str, Any]:
         "positions": to_wire(arm.positions),
         "mode": status.mode.value,
         "reason": status.reason,
+        "gripper": describe_gripper(arm.gripper, world.time) if arm.has_gripper else None,
     }
 
 

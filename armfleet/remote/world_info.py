@@ -64,3 +64,41 @@ class TopicInfo:
     topic: str
     type_name: str
     command: bool
+
+
+@dataclass(frozen=True)
+class ObjectInfo:
+    """A scene object of a world, as :meth:`Client.objects` reports it.
+
+    Attributes:
+        name: its name, also its frame on ``/tf``.
+        shape: ``box``, ``cylinder``, ``sphere`` or ``mesh``.
+        size: box (x, y, z) full extents; cylinder (radius, length); sphere (radius,);
+            mesh: its bounding box [m].
+        mass: [kg]; 0 for a static object.
+        static: fixed in the world (mass 0), like a table.
+        position: (x, y, z) of its frame in ``world`` now [m].
+        rpy_deg: its roll, pitch, yaw now [deg] (R = Rz(yaw) Ry(pitch) Rx(roll)).
+    """
+
+    name: str
+    shape: str
+    size: tuple[float, ...]
+    mass: float
+    static: bool
+    position: tuple[float, float, float]
+    rpy_deg: tuple[float, float, float]
+
+    @classmethod
+    def from_wire(cls, data: dict[str, Any]) -> ObjectInfo:
+        x, y, z = (float(v) for v in data["position"])
+        roll, pitch, yaw = (float(v) for v in data["rpy_deg"])
+        return cls(
+            name=str(data["name"]),
+            shape=str(data["shape"]),
+            size=tuple(float(v) for v in data["size"]),
+            mass=float(data["mass"]),
+            static=bool(data["static"]),
+            position=(x, y, z),
+            rpy_deg=(roll, pitch, yaw),
+        )
