@@ -5,7 +5,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
 import pinocchio as pin
 
 from armfleet.arm_body import ArmBody
@@ -20,11 +19,10 @@ from armfleet.errors import (
     ArmInMotion,
     NoGripper,
     ProtectiveStopError,
-    UnknownFrame,
     UnreachablePose,
 )
 from armfleet.gripper import Gripper
-from armfleet.inverse_kinematics import InverseKinematics, as_se3
+from armfleet.inverse_kinematics import InverseKinematics, link_frame, world_goal
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     ArmMode,
@@ -80,20 +78,7 @@ class Arm:
         self._frame_pose = frame_pose
         #: Inverse kinematics of this arm (its own Pinocchio data).
         self.ik = InverseKinematics(kinematics)
-        controller = position_controller
-        self._linear = LinearPathPlanner(
-            name,
-            self.ik,
-            kinematics.arm_indices,
-            (
-                controller.lower,
-                controller.upper,
-                controller.max_velocity,
-                np.full(controller.lower.size, controller.parameters["max_acceleration_rad_s2"]),
-                np.full(controller.lower.size, controller.parameters["max_jerk_rad_s3"]),
-            ),
-            controller.period,
-        )
+        self._linear = LinearPathPlanner(name, self.ik, position_controller)
 
     @property
     def name(self) -> str:
@@ -282,17 +267,8 @@ class Arm:
 
     def _resolve(self, pose: Any, frame: str, link: str) -> tuple[pin.SE3, str]:
         """The world pose wanted for ``link`` and the link's prefixed frame name."""
-        prefix = self.description.prefix
-        name = link if link.startswith(prefix) else prefix + link
-        if not self.kinematics.has_frame(name):
-            links = (n.removeprefix(prefix) for n in self.kinematics.link_names if n != "world")
-            raise UnknownFrame(link, f"links of {self._name}: {', '.join(sorted(links))}")
-        goal = as_se3(pose)
-        if frame != "world":
-            if self._frame_pose is None:
-                raise UnknownFrame(frame, "this arm has no frame resolver; give a world pose")
-            goal = pin.SE3(self._frame_pose(frame)) * goal
-        return goal, name
+        name = link_frame(self._name, self.kinematics, self.description.prefix, link)
+        return world_goal(pose, frame, self._frame_pose), name
 
     def __repr__(self) -> str:
         return f"Arm({self._name!r}, model={self.model!r}, pose={self._pose})"

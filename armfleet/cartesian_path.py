@@ -24,11 +24,11 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import numpy.typing as npt
 import pinocchio as pin
 import ruckig
 
 from armfleet.controllers.jerk_limited_trajectory import SampledMotion, TrajectoryError
+from armfleet.controllers.position_controller import PositionController
 from armfleet.errors import UnreachablePose
 from armfleet.inverse_kinematics import InverseKinematics
 from armfleet.messages import FloatArray
@@ -49,25 +49,20 @@ class LinearPathPlanner:
     Args:
         arm: arm name (for errors).
         ik: the arm's IK solver.
-        arm_indices: indices (into q) of the arm joints.
-        limits: per arm joint: lower and upper position [rad or m], largest
-            velocity, acceleration and jerk (units per s^k).
-        period_s: control period of the samples [s].
+        controller: the arm's (configured) position controller: its joints'
+            limits and its control period, at which the motion is sampled.
     """
 
-    def __init__(
-        self,
-        arm: str,
-        ik: InverseKinematics,
-        arm_indices: npt.NDArray[np.int_],
-        limits: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
-        period_s: float,
-    ) -> None:
+    def __init__(self, arm: str, ik: InverseKinematics, controller: PositionController) -> None:
         self._arm_name = arm
         self._ik = ik
-        self._arm = arm_indices
-        self._lower, self._upper, self._velocity, self._acceleration, self._jerk = limits
-        self._period = period_s
+        self._arm = controller.arm.kinematics.arm_indices
+        self._lower, self._upper = controller.lower, controller.upper
+        self._velocity = controller.max_velocity
+        dofs = self._lower.size
+        self._acceleration = np.full(dofs, controller.parameters["max_acceleration_rad_s2"])
+        self._jerk = np.full(dofs, controller.parameters["max_jerk_rad_s3"])
+        self._period = controller.period
 
     def plan(self, frame: str, link: str, start: FloatArray, goal: pin.SE3) -> SampledMotion:
         """Samples (one per period) moving ``frame`` in a straight line to ``goal``.

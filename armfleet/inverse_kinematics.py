@@ -25,13 +25,14 @@ has not halved for 10 iterations.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from armfleet.errors import TargetPoseError
+from armfleet.errors import TargetPoseError, UnknownFrame
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
 
@@ -69,6 +70,25 @@ def as_se3(pose: Any) -> pin.SE3:
             "last row 0 0 0 1"
         )
     return pin.SE3(rotation.copy(), matrix[:3, 3].copy())
+
+
+def world_goal(pose: Any, frame: str, frame_pose: Callable[[str], FloatArray] | None) -> pin.SE3:
+    """``pose`` given in ``frame`` as a world pose; ``frame_pose`` gives a frame's world pose."""
+    goal = as_se3(pose)
+    if frame == "world":
+        return goal
+    if frame_pose is None:
+        raise UnknownFrame(frame, "this arm has no frame resolver; give a world pose")
+    return pin.SE3(frame_pose(frame)) * goal
+
+
+def link_frame(arm: str, kinematics: ArmKinematics, prefix: str, link: str) -> str:
+    """The prefixed frame of ``link`` (given with or without the arm's prefix)."""
+    name = link if link.startswith(prefix) else prefix + link
+    if not kinematics.has_frame(name):
+        links = (n.removeprefix(prefix) for n in kinematics.link_names if n != "world")
+        raise UnknownFrame(link, f"links of {arm}: {', '.join(sorted(links))}")
+    return name
 
 
 @dataclass(frozen=True)
