@@ -260,9 +260,12 @@ SPAWN_CASES = [
     ),
     pytest.param(
         BadInput(
-            spawn_toby(parameters={"gripper_controller": {}}),
+            spawn_toby(parameters={"velocity_controller": {}}),
             ParameterError,
-            lambda w, b: ["gripper_controller", "joint_state_broadcaster, position_controller"],
+            lambda w, b: [
+                "velocity_controller",
+                "joint_state_broadcaster, position_controller, gripper_controller",
+            ],
         ),
         id="override-unknown-controller",
     ),
