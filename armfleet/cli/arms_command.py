@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.parser import OneLineParser
@@ -17,13 +18,24 @@ def run(args: argparse.Namespace) -> int:
     with connect_from(args) as client:
         arms = client.call("arms")
         info = client.info()
-    print(f"{'name':<12} {'model':<8} {'mode':<16} {'at (x, y, z [m], yaw [deg])':<28} q [rad]")
+    print(
+        f"{'name':<12} {'model':<8} {'mode':<16} {'at (x, y, z [m], yaw [deg])':<28} "
+        f"{'gripper':<24} q [rad]"
+    )
     for arm in arms:
         pose = arm["pose"]
         at = f"{pose['x']:.2f}, {pose['y']:.2f}, {pose['z']:.2f}, {pose['yaw_deg']:.0f}"
         q = " ".join(f"{v:+.3f}" for v in arm["positions"])
         mode = arm["mode"] + (f" ({arm['reason']})" if arm["reason"] else "")
-        print(f"{arm['name']:<12} {arm['model']:<8} {mode:<16} {at:<28} [{q}]")
+        gripper = _gripper(arm.get("gripper"))
+        print(f"{arm['name']:<12} {arm['model']:<8} {mode:<16} {at:<28} {gripper:<24} [{q}]")
     state = "paused" if info.paused else "running"
     print(f"({len(arms)} arm(s); t={info.time_s:.3f}s, {state}, {client.address})")
     return 0
+
+
+def _gripper(state: dict[str, Any] | None) -> str:
+    """E.g. ``0.0400 m holding``, ``0.0800 m at width``; ``-`` for an arm without fingers."""
+    if state is None:
+        return "-"
+    return f"{state['width']:.4f} m " + ("holding" if state["holding"] else state["mode"])

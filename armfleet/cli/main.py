@@ -10,9 +10,12 @@ from collections.abc import Sequence
 from armfleet import __version__
 from armfleet.cli import (
     arms_command,
+    grip_command,
     launch_command,
     models_command,
     move_command,
+    move_together_command,
+    object_commands,
     plot_command,
     recording_info_command,
     remove_command,
@@ -40,9 +43,12 @@ def build_parser() -> OneLineParser:
     models_command.add_parser(subparsers)
     arms_command.add_parser(subparsers)
     move_command.add_parser(subparsers)
+    move_together_command.add_parser(subparsers)
+    grip_command.add_parser(subparsers)
     remove_command.add_parser(subparsers)
     reset_command.add_parser(subparsers)
     topic_command.add_parser(subparsers)
+    object_commands.add_parsers(subparsers)
     world_commands.add_parsers(subparsers)
     recording_info_command.extend_info_parser(subparsers.choices["info"])
     plot_command.add_parser(subparsers)

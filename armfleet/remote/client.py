@@ -6,10 +6,11 @@ import contextlib
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+import numpy as np
 import zmq
 
 from armfleet.errors import ArmfleetError
-from armfleet.messages import JointCommand, Positions
+from armfleet.messages import FloatArray, JointCommand, Positions
 from armfleet.remote import runtime_file
 from armfleet.remote.address import normalize_address
 from armfleet.remote.errors import NoWorldFound, RequestTimeout
@@ -180,6 +181,13 @@ class Client:
     def remove_object(self, name: str) -> None:
         """Take the object ``name`` out of the world."""
         self.call("remove_object", {"name": name})
+
+    # -- frames -----------------------------------------------------------------------
+    def lookup(self, target_frame: str, source_frame: str) -> FloatArray:
+        """4x4 pose of ``source_frame`` in ``target_frame`` now, as ``world.tf.lookup``
+        (frames: ``world``, the arms' prefixed links, the objects)."""
+        result = self.call("lookup", {"target": target_frame, "source": source_frame})
+        return np.reshape(np.asarray(result["matrix"], dtype=float), (4, 4))
 
     # -- topics -----------------------------------------------------------------------
     def topics(self) -> dict[str, TopicInfo]:

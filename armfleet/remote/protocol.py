@@ -52,6 +52,7 @@ class Service(enum.Enum):
     ARMS = "arms"
     ARM = "arm"
     JOINT_STATE = "joint_state"
+    LOOKUP = "lookup"
     SPAWN = "spawn"
     REMOVE = "remove"
     MOVE = "move"

@@ -42,6 +42,7 @@ FIELDS: dict[Service, tuple[str, ...]] = {
     Service.ARMS: (),
     Service.ARM: ("name",),
     Service.JOINT_STATE: ("name",),
+    Service.LOOKUP: ("target", "source"),
     Service.SPAWN: ("name", "model", "at", "initial_positions", "parameters"),
     Service.REMOVE: ("name",),
     Service.MOVE: ("name", "positions"),
@@ -88,6 +89,7 @@ class WorldServices:
             Service.ARMS: self.prepare_arms,
             Service.ARM: self.prepare_arm,
             Service.JOINT_STATE: self.prepare_joint_state,
+            Service.LOOKUP: self.prepare_lookup,
             Service.SPAWN: self.prepare_spawn,
             Service.REMOVE: self.prepare_remove,
             Service.MOVE: self.prepare_move,
@@ -138,6 +140,15 @@ class WorldServices:
     def prepare_joint_state(self, args: Arguments) -> Work:
         name, world = args.text("name"), self._world
         return lambda: to_wire(world.arm(name).joint_state)
+
+    def prepare_lookup(self, args: Arguments) -> Work:
+        target, source, world = args.text("target"), args.text("source"), self._world
+
+        def lookup() -> dict[str, Any]:
+            matrix = world.tf.lookup(target, source)
+            return {"time_s": world.time, "matrix": to_wire(matrix.reshape(-1))}
+
+        return lookup
 
     def prepare_topics(self, args: Arguments) -> Work:
         world = self._world
