@@ -65,7 +65,7 @@ CASES = [
         "unknown service",
         lambda t: one(request("explode")),
         "UnknownService",
-        "services: arm, arms",
+        "services: add_object, arm, arms",
     ),
     Case(
         "unknown request field",
@@ -146,7 +146,7 @@ CASES = [
         "unknown topic",
         lambda t: one(request("subscribe", {"topic": "/zed/joint_states", "stream": t, "sub": 1})),
         "UnknownTopic",
-        "unknown topic '/zed/joint_states'; topics: /bob/joint_states",
+        "unknown topic '/zed/joint_states'; topics: /bob/gripper_controller/commands",
     ),
     Case(
         "malformed topic",

@@ -17,6 +17,9 @@ from armfleet.messages import (
     CollisionReport,
     Contact,
     ControllerState,
+    GripperCommand,
+    GripperMode,
+    GripperState,
     JointCommand,
     JointState,
     TFMessage,
@@ -52,6 +55,8 @@ SAMPLES = [
         (Contact("bob", "bob_panda_link7", "toby", "", (1.0, 2.0, 3.0), (0.0, 0.0, 1.0), 0.001),),
     ),
     ArmStatus(4.0, "bob", ArmMode.PROTECTIVE_STOP, "touched toby", (0, 3)),
+    GripperCommand(0.04, False, 20.0),
+    GripperState(5.0, 0.0395, 0.04, 12.5, GripperMode.SQUEEZING, True),
 ]
 
 
