@@ -99,14 +99,18 @@ class ProtectiveStopError(ArmfleetError):
     def __init__(self, arm: str, reason: str) -> None:
         self.arm, self.reason = arm, reason
         super().__init__(
-            f"{arm} is in protective stop ({reason}); call reset_stop() before moving it"
+            f"{arm} is in protective stop ({reason}); call reset_stop() "
+            f"(CLI: armfleet reset {arm}) before moving it"
         )
 
 
 class ArmFault(ArmfleetError):
     def __init__(self, arm: str, reason: str) -> None:
         self.arm, self.reason = arm, reason
-        super().__init__(f"{arm} is in error ({reason}); call reset() before moving it")
+        super().__init__(
+            f"{arm} is in error ({reason}); call reset() (CLI: armfleet reset {arm}) "
+            "before moving it"
+        )
 
 
 class PoseError(ArmfleetError):
@@ -212,7 +216,7 @@ class UnreachablePose(ArmfleetError):
         self.position_error_m, self.rotation_error_rad = position_error_m, rotation_error_rad
         super().__init__(
             f"{arm}: {link} cannot reach the pose{where} within the joint limits (best residual "
-            f"{position_error_m * 1e3:.3g} mm, {rotation_error_rad * 1e3:.3g} mrad); nothing "
+            f"{position_error_m * 1e3:.1f} mm, {rotation_error_rad * 1e3:.1f} mrad); nothing "
             "moved: choose a pose within the arm's reach"
         )
 
