@@ -32,19 +32,29 @@ def filter_collisions(
     parent_group = {
         group: groups[body.link_parents[group][0]] for group in set(groups.values()) if group >= 0
     }
-    links = sorted(body.link_parents)
 
     def adjacent(a: int, b: int) -> bool:
         ga, gb = groups[a], groups[b]
         return ga == gb or parent_group.get(ga) == gb or parent_group.get(gb) == ga
 
-    pairs = {(a, b) for i, a in enumerate(links) for b in links[i + 1 :] if adjacent(a, b)}
+    # Links without a collision shape (landmarks, flanges) touch nothing: no filter
+    # needed (each setCollisionFilterPair costs tens of µs in a full world).
+    solid = [
+        link
+        for link in sorted(body.link_parents)
+        if p.getCollisionShapeData(body.body_id, link, physicsClientId=client)
+    ]
+    pairs = {(a, b) for i, a in enumerate(solid) for b in solid[i + 1 :] if adjacent(a, b)}
     known = set(body.link_names)
     for first, second in ignored_pairs:
         if first in known and second in known:
-            pairs.add((body.link_index(first), body.link_index(second)))
+            a, b = body.link_index(first), body.link_index(second)
+            if a in solid and b in solid:
+                pairs.add((a, b))
     for a, b in pairs:
+        if body.link_parents[a][0] == b or body.link_parents[b][0] == a:
+            continue  # a link and its parent: ArmBody's load flags leave them out already
         p.setCollisionFilterPair(body.body_id, body.body_id, a, b, 0, physicsClientId=client)
-    for link in links:
+    for link in solid:
         if groups[link] == -1:
             p.setCollisionFilterPair(ground, body.body_id, -1, link, 0, physicsClientId=client)

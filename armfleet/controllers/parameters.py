@@ -8,6 +8,7 @@ may override any of them without touching another arm's.
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -61,12 +62,8 @@ def load_parameters(
     path = path or controller_file(controller)
     if not path.is_file():
         raise ParameterError(f"{path}: controller parameter file not found")
-    try:
-        document = load_located(path.read_text())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-        raise ParameterError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+    stat = path.stat()
+    document = _parsed(path, stat.st_mtime_ns, stat.st_size)
     if not isinstance(document, LocatedDict) or controller not in document:
         found = ", ".join(document) if isinstance(document, LocatedDict) else "nothing"
         raise ParameterError(f"{path}: no '{controller}:' section (found: {found})")
@@ -82,6 +79,19 @@ def load_parameters(
     for key, value in (overrides or {}).items():
         values[key] = _check(controller, "override", schema, key, value)
     return values
+
+
+@functools.lru_cache(maxsize=64)
+def _parsed(path: Path, mtime_ns: int, size: int) -> Any:
+    """The located YAML of ``path``, parsed once per version of the file (every arm of a
+    fleet reads the same few files; the result is only read, never changed)."""
+    del mtime_ns, size  # part of the cache key only
+    try:
+        return load_located(path.read_text())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+        raise ParameterError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
 
 
 def _check(
