@@ -216,15 +216,10 @@ class GripperController(Controller):
         moving = self.trajectory is not None and self.trajectory.moving
         if not self._grasp:
             return GripperMode.MOVING if moving else GripperMode.AT_WIDTH
-        if self.width <= self.parameters["min_width_m"] and not moving:
-            return GripperMode.CLOSED
-        if all(self._blocked):
-            return (
-                GripperMode.SQUEEZING
-                if self.width > self.parameters["min_width_m"]
-                else (GripperMode.CLOSED)
-            )
-        return GripperMode.CLOSING
+        blocked = all(self._blocked)
+        if self.width <= self.parameters["min_width_m"] and (blocked or not moving):
+            return GripperMode.CLOSED  # on nothing, or what it held slipped out
+        return GripperMode.SQUEEZING if blocked else GripperMode.CLOSING
 
     @property
     def holding(self) -> bool:
