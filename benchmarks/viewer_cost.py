@@ -36,21 +36,11 @@ from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
 
 import armfleet
 import armfleet.viewer
+from armfleet.viewer.headless_chromium import CHROMIUM, CHROMIUM_FLAGS
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "viewer_cost.json"
 ARTIFACTS = ROOT / "test-artifacts"
-CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_FLAGS = (
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--enable-unsafe-swiftshader",
-)
 PANDA_MESHES = 11
 MESHES_LOADED_JS = """
 (expected) => {

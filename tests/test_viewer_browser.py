@@ -19,21 +19,10 @@ import pytest
 from PIL import Image
 
 import armfleet
+from armfleet.viewer.headless_chromium import CHROMIUM, CHROMIUM_FLAGS
 from armfleet.viewer.scene import BACKGROUND_TOP
 from tests.viewer_helpers import bob_and_toby_viewed, expected_visual_poses
 
-CHROMIUM = Path("/usr/bin/chromium")
-#: FIELD-NOTES: software WebGL via SwiftShader; never --use-gl=swiftshader (all white).
-CHROMIUM_FLAGS = (
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--enable-unsafe-swiftshader",
-)
 VIEWPORT_WIDTH, VIEWPORT_HEIGHT = 960, 600
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
 #: Software WebGL on 2 cores takes seconds per Panda; leave a wide margin.
