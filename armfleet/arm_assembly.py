@@ -6,8 +6,6 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from armfleet.arm import Arm
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
@@ -64,9 +62,13 @@ def start_positions(
     name: str, kinematics: ArmKinematics, home: Sequence[float], initial: Positions | None
 ) -> FloatArray:
     """Every movable joint's position at spawn: ``initial`` (checked) or the model's home
-    for the arm joints, 0 (or mid-range when 0 is outside the limits) for the others."""
+    for the arm joints, mid-range for the others (a Panda's gripper half open).
+
+    Off their limits: a joint resting on a limit keeps a limit constraint busy in
+    the physics solver at every step.
+    """
     lower, upper = kinematics.lower, kinematics.upper
-    start = np.where((lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper)).astype(float)
+    start: FloatArray = 0.5 * (lower + upper)
     arm = kinematics.arm_indices
     if len(home) != len(arm):
         raise DescriptionError(f"home pose has {len(home)} values for {len(arm)} arm joints")

@@ -73,6 +73,21 @@ class ArmBody:
         self._torque_mode = False
         self.engage_brakes()
 
+    def bind(self, position: FloatArray, velocity: FloatArray, effort_command: FloatArray) -> None:
+        """Keep :attr:`position`, :attr:`velocity` and :attr:`effort_command` in the given
+        arrays from now on (views of the world's joint memory), with their current values."""
+        position[:], velocity[:], effort_command[:] = (
+            self.position,
+            self.velocity,
+            self.effort_command,
+        )
+        self.position, self.velocity, self.effort_command = position, velocity, effort_command
+
+    @property
+    def torque_mode(self) -> bool:
+        """Whether the efforts are ours (brakes released)."""
+        return self._torque_mode
+
     @property
     def link_names(self) -> tuple[str, ...]:
         return tuple(self._link_index)

@@ -117,13 +117,19 @@ class ArmKinematics:
         relative = placements[self._frame_ids[parent]].actInv(placements[self._frame_ids[child]])
         return np.array(relative.homogeneous)
 
+    def rnea(self, q: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
+        """Joint torques for acceleration ``a`` of the rigid bodies (Pinocchio's RNEA), without
+        the joint damping; a new array."""
+        tau: FloatArray = pin.rnea(self.model, self.data, q, v, a)
+        return tau
+
     def inverse_dynamics(self, q: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
         """Joint torques for acceleration ``a``: RNEA plus the URDF viscous damping.
 
         PyBullet applies the URDF joint damping (``-damping * v``); RNEA does not,
         so it is added here for the two to agree.
         """
-        tau: FloatArray = pin.rnea(self.model, self.data, q, v, a)
+        tau = self.rnea(q, v, a)
         np.multiply(self.damping, v, out=self._damping_torque)
         tau += self._damping_torque
         return tau

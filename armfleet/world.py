@@ -23,8 +23,11 @@ from armfleet.arm_assembly import (
 from armfleet.bringup import BRINGUP_TOPIC, bring_up
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
+from armfleet.controllers.fleet_update import FleetUpdate
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, NameInUse, ObjectError, UnknownArm, WorldClosed
+from armfleet.ground import create_ground
+from armfleet.joint_memory import JointMemory
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import (
     BringupEvent,
@@ -61,7 +64,7 @@ T = TypeVar("T")
 
 
 class World:
-    """A PyBullet world (DIRECT mode) with gravity, a ground plane and arms.
+    """A PyBullet world (DIRECT mode) with gravity, a floor at z = 0 and arms.
 
     Args:
         dt: physics step [s].
@@ -91,12 +94,13 @@ class World:
         self._client: int = p.connect(p.DIRECT)
         p.setTimeStep(dt, physicsClientId=self._client)
         p.setGravity(0.0, 0.0, -gravity, physicsClientId=self._client)
-        plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=self._client)
-        self._ground = p.createMultiBody(0.0, plane, physicsClientId=self._client)
+        self._ground = create_ground(self._client)
         self._models = models or ModelLibrary()
         self._bus = Bus()
         self._bus.advertise(BRINGUP_TOPIC, BringupEvent)
         self._arms: dict[str, Arm] = {}
+        self._memory = JointMemory(self._client)
+        self._controllers = FleetUpdate(self._memory)
         self._step_index = 0
         self._closed = False
         self._tf = TfTree(self._arm_states, lambda: self._objects.objects)
@@ -257,6 +261,7 @@ class World:
             frame_pose=self._tf.world_pose,
         )
         self._arms[name] = arm
+        self._controllers.lay_out(self._arms.values())
         self._contacts.add_arm(name, arm.body)
         try:
             with self._requests.held():  # nobody else's request inside this bring-up
@@ -283,6 +288,7 @@ class World:
         arm.state_publisher.close()
         arm.body.remove()
         del self._arms[arm.name]
+        self._controllers.lay_out(self._arms.values())
 
     # -- objects ----------------------------------------------------------------------
     @property
@@ -384,20 +390,16 @@ class World:
         self._check_open()
         self._requests.drain()
         stamp = self.time
-        arms = self._arms.values()
-        for arm in arms:
-            arm.controller_manager.update(stamp, self._step_index)
-        for arm in arms:
-            arm.body.write()
+        self._controllers.update(stamp, self._step_index)
+        self._memory.write()
         p.stepSimulation(physicsClientId=self._client)
         self._step_index += 1
-        for arm in arms:
-            arm.body.read()
+        self._memory.read()
         self._objects.after_step(self.time)
         self._contacts.scan(self.time)
         self._safety.after_scan()
         if self._step_index % self._status_period_steps == 0:
-            for arm in arms:
+            for arm in self._arms.values():
                 self._publish_status(arm)
         if self._viewer is not None:
             self._viewer.tick(self)

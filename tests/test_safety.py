@@ -125,17 +125,17 @@ def test_a_faulty_controller_puts_only_its_arm_in_error(pair: armfleet.World, fa
     )
     bob_states: list[JointState] = []
     pair.bus.subscribe("/bob/joint_states", bob_states.append)
-    toby.move_to(toby.positions - 0.5)
+    toby.move_to(toby.positions + 0.5)  # clear of itself with the gripper half open
     pair.run(0.2)
     if fault == "raises":
 
         def broken(*args: object) -> np.ndarray:
             raise RuntimeError("solver diverged")
 
-        original = bob.kinematics.inverse_dynamics
-        bob.kinematics.inverse_dynamics = broken  # type: ignore[method-assign,assignment]
+        original = bob.kinematics.rnea
+        bob.kinematics.rnea = broken  # type: ignore[method-assign,assignment]
     else:
-        bob.position_controller._kp = float("nan")
+        bob.position_controller._kp[:] = float("nan")
     bob.move_to(bob.positions + 0.2)
     pair.run(0.1)
 
@@ -154,9 +154,9 @@ def test_a_faulty_controller_puts_only_its_arm_in_error(pair: armfleet.World, fa
         bob.move_to(bob.positions)
 
     if fault == "raises":
-        bob.kinematics.inverse_dynamics = original  # type: ignore[method-assign]
+        bob.kinematics.rnea = original  # type: ignore[method-assign]
     else:
-        bob.position_controller._kp = bob.position_controller.parameters["kp_s2"]
+        bob.position_controller._kp[:] = bob.position_controller.parameters["kp_s2"]
     bob.reset()
     assert bob.status(pair.time).mode is ArmMode.HOLDING
     target = np.array(bob.description.home)

@@ -32,6 +32,8 @@ class ControllerManager:
         self._controllers: dict[str, Controller] = {}
         self._running: list[Controller] = []
         self._fault: str | None = None
+        #: Changes whenever the running controllers do (for callers that cache them).
+        self.version = 0
 
     @property
     def controllers(self) -> dict[str, Controller]:
@@ -69,6 +71,12 @@ class ControllerManager:
             if controller.state is LifecycleState.INACTIVE:
                 controller.cleanup()
         self._running = []
+        self.version += 1
+
+    @property
+    def running(self) -> tuple[Controller, ...]:
+        """The controllers updated at each step (their rates permitting), in load order."""
+        return tuple(self._running)
 
     def update(self, stamp: float, step_index: int) -> None:
         """Update every running controller whose period divides ``step_index``, in load order."""
@@ -77,8 +85,16 @@ class ControllerManager:
                 try:
                     controller.update(stamp)
                 except Exception as exc:  # contain it to this arm
-                    self._fail(f"{controller.name} raised {type(exc).__name__}: {exc}", controller)
+                    self.fail_controller(controller, exc)
                     return
+        self.check_efforts()
+
+    def fail_controller(self, controller: Controller, exc: Exception) -> None:
+        """Put the arm in ``error`` because ``controller`` raised ``exc`` in its update."""
+        self._fail(f"{controller.name} raised {type(exc).__name__}: {exc}", controller)
+
+    def check_efforts(self) -> None:
+        """Put the arm in ``error`` if its effort commands are not all finite."""
         effort = self._arm.body.effort_command
         # A dot product is NaN or inf whenever an element is (and cheaper than isfinite().all()).
         if self._fault is None and not math.isfinite(effort.dot(effort)):
@@ -100,6 +116,7 @@ class ControllerManager:
         self._fault = reason
         self._arm.body.engage_brakes()
         self._running = [c for c in self._running if not c.writes_commands and c is not culprit]
+        self.version += 1
         logger.error("%s: error: %s", self._arm.name, reason)
         if self._on_fault is not None:
             self._on_fault(reason)
@@ -109,3 +126,4 @@ class ControllerManager:
         self._running = (
             active if self._fault is None else [c for c in active if not c.writes_commands]
         )
+        self.version += 1

@@ -30,7 +30,7 @@ import numpy.typing as npt
 from armfleet.controllers.controller import ArmContext, Controller
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
 from armfleet.controllers.parameters import ParameterSpec
-from armfleet.controllers.position_controller import PositionController
+from armfleet.controllers.position_controller import PositionController, as_slice
 from armfleet.errors import ArmfleetError, GripperCommandError
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import GripperCommand, GripperMode, GripperState
@@ -97,6 +97,7 @@ class GripperController(Controller):
         self._fingers = finger_indices(kinematics)
         if self._fingers.size == 0:
             raise ArmfleetError(f"{self.arm.name}: the model has no fingers for a gripper")
+        self._finger_part = as_slice(self._fingers)  # faster to index with than the indices
         self.finger_names = tuple(kinematics.joint_names[i] for i in self._fingers)
         self._links = [self.arm.body.joint_indices[i] for i in self._fingers]
         for link in self._links:  # rubber pads
@@ -241,8 +242,9 @@ class GripperController(Controller):
         trajectory = self.trajectory
         assert trajectory is not None  # set by on_activate
         body = self.arm.body
-        q = body.position[self._fingers].tolist()
-        v = body.velocity[self._fingers].tolist()
+        part = self._finger_part
+        q = body.position[part].tolist()
+        v = body.velocity[part].tolist()
         k, c, force, blocked = self._stiffness, self._gain_damping, self._force, self._blocked
         if self._grasp and not all(blocked):
             lag = self.parameters["block_distance_m"]
@@ -282,7 +284,7 @@ class GripperController(Controller):
                 )
             ]
         self._effort = effort
-        body.effort_command[self._fingers] = effort
+        body.effort_command[part] = effort
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(self._state_topic, self.gripper_state(stamp))
         trajectory.advance()

@@ -63,6 +63,7 @@ class JerkLimitedTrajectory:
         start: initial position, at rest [rad or m].
         period: time between :meth:`advance` calls [s].
         max_velocity, max_acceleration, max_jerk: per-joint limits (units per s^k).
+        buffers: arrays to keep the position, velocity and acceleration in (see :meth:`bind`).
     """
 
     def __init__(
@@ -72,6 +73,7 @@ class JerkLimitedTrajectory:
         max_velocity: FloatArray,
         max_acceleration: FloatArray,
         max_jerk: FloatArray,
+        buffers: tuple[FloatArray, FloatArray, FloatArray] | None = None,
     ) -> None:
         dofs = len(start)
         self._otg = ruckig.Ruckig(dofs, period)
@@ -83,9 +85,17 @@ class JerkLimitedTrajectory:
         self.position = np.array(start, dtype=float)
         self.velocity = np.zeros(dofs)
         self.acceleration = np.zeros(dofs)
+        if buffers is not None:
+            self.bind(*buffers)
         self._moving = False
         self._samples: SampledMotion | None = None
         self._sample_index = 0
+
+    def bind(self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray) -> None:
+        """Keep the reference in the given arrays from now on (e.g. views of the world's
+        joint memory), with its current values."""
+        position[:], velocity[:], acceleration[:] = self.position, self.velocity, self.acceleration
+        self.position, self.velocity, self.acceleration = position, velocity, acceleration
 
     @property
     def moving(self) -> bool:

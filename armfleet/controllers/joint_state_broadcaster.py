@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from armfleet.controllers.controller import Controller
 from armfleet.controllers.parameters import ParameterSpec
-from armfleet.messages import JointState
+from armfleet.messages import FloatArray, JointState
 
 
 class JointStateBroadcaster(Controller):
@@ -25,11 +25,11 @@ class JointStateBroadcaster(Controller):
 
     def update(self, stamp: float) -> None:
         body = self.arm.body
-        self.latest = JointState(
-            stamp,
-            self._names,
-            body.position.copy(),
-            body.velocity.copy(),
-            body.effort_command.copy(),
-        )
+        self.publish(stamp, body.position.copy(), body.velocity.copy(), body.effort_command.copy())
+
+    def publish(
+        self, stamp: float, position: FloatArray, velocity: FloatArray, effort: FloatArray
+    ) -> None:
+        """Publish a sample of the arm's joints: arrays nobody writes to again (copies)."""
+        self.latest = JointState(stamp, self._names, position, velocity, effort)
         self.arm.bus.publish(self._topic, self.latest)

@@ -34,6 +34,7 @@ from armfleet.errors import (
     TargetLengthError,
     TargetTypeError,
 )
+from armfleet.joint_memory import JointViews, Row
 from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
 
 logger = logging.getLogger("armfleet")
@@ -75,27 +76,32 @@ class PositionController(Controller):
         self.max_velocity = (
             kinematics.velocity_limit[self._arm] * self.parameters["velocity_scaling"]
         )
-        self._kp = self.parameters["kp_s2"]
-        self._kd = self.parameters["kd_s"]
-        self._effort_limit = kinematics.effort_limit
         #: Per movable joint, the updates whose torque was clipped to the effort limit.
         self.saturation_steps = np.zeros(len(kinematics.joint_names), dtype=np.int64)
         #: Why the arm is in protective stop, or None.
         self.stop_reason: str | None = None
         self._anchor_when_stopped = False
         size = len(kinematics.joint_names)
-        # Full-size (every movable joint) buffers, reused at every update: the arm
-        # joints' reference comes from Ruckig, the others hold where they were.
+        # Full-size (every movable joint) arrays, reused at every update: the arm
+        # joints' reference comes from Ruckig, the others hold where they were. In a
+        # world they are views of its joint memory (see bind()).
         self._arm_part = as_slice(self._arm)
         self._ref_position = np.zeros(size)
         self._ref_velocity = np.zeros(size)
         self._ref_acceleration = np.zeros(size)
+        self._kp = np.full(size, float(self.parameters["kp_s2"]))
+        self._kd = np.full(size, float(self.parameters["kd_s"]))
+        self._damping = kinematics.damping.copy()
+        self._effort_limit = kinematics.effort_limit.copy()
+        self._negative_effort_limit = -self._effort_limit
         self._acceleration = np.zeros(size)
+        self._torque = np.zeros(size)
         self._scratch = np.zeros(size)
         self._saturated = np.zeros(size, dtype=bool)
-        self._negative_effort_limit = -self._effort_limit
         #: Joints another controller drives (the gripper's fingers): no feedback here.
         self._released = np.zeros(0, dtype=int)
+        #: Columns of the world's joint memory this controller's arrays are views of.
+        self.memory_columns: slice | None = None
         self.trajectory: JerkLimitedTrajectory | None = None
         self._state_topic = self.arm.topic("position_controller/state")
         self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
@@ -112,14 +118,15 @@ class PositionController(Controller):
         body = self.arm.body
         body.read()
         n = len(self._arm)
+        self._ref_position[:] = body.position
         self.trajectory = JerkLimitedTrajectory(
             body.position[self._arm],
             self.period,
             self.max_velocity,
             np.full(n, self.parameters["max_acceleration_rad_s2"]),
             np.full(n, self.parameters["max_jerk_rad_s3"]),
+            buffers=self._reference_parts(),
         )
-        self._ref_position[:] = body.position
         self._ref_velocity[:] = 0.0
         self._ref_acceleration[:] = 0.0
         body.release_brakes()
@@ -137,6 +144,53 @@ class PositionController(Controller):
         if np.intersect1d(indices, self._arm).size:
             raise ArmfleetError(f"{self.arm.name}: position_controller keeps the arm joints")
         self._released = np.asarray(indices, dtype=int)
+        # Released joints: no feedback gain and no reference acceleration, so their
+        # commanded acceleration is zero.
+        self._kp[:] = self.parameters["kp_s2"]
+        self._kd[:] = self.parameters["kd_s"]
+        self._kp[self._released] = 0.0
+        self._kd[self._released] = 0.0
+        self._ref_acceleration[self._released] = 0.0
+
+    def bind(self, views: JointViews) -> None:
+        """Keep the reference, gains and limits in ``views`` (the arm's columns of the
+        world's joint memory) from now on, with their current values."""
+        arrays = (
+            (Row.REFERENCE_POSITION, "_ref_position"),
+            (Row.REFERENCE_VELOCITY, "_ref_velocity"),
+            (Row.REFERENCE_ACCELERATION, "_ref_acceleration"),
+            (Row.KP, "_kp"),
+            (Row.KD, "_kd"),
+            (Row.DAMPING, "_damping"),
+            (Row.EFFORT_LIMIT, "_effort_limit"),
+            (Row.NEGATIVE_EFFORT_LIMIT, "_negative_effort_limit"),
+            (Row.ACCELERATION, "_acceleration"),
+            (Row.TORQUE, "_torque"),
+            (Row.SCRATCH, "_scratch"),
+        )
+        for row, attribute in arrays:
+            view = views.row(row)
+            view[:] = getattr(self, attribute)
+            setattr(self, attribute, view)
+        views.saturation_steps[:] = self.saturation_steps
+        self.saturation_steps = views.saturation_steps
+        parts = self._reference_parts()
+        if self.trajectory is not None and parts is not None:
+            self.trajectory.bind(*parts)
+        self.memory_columns = views.columns
+
+    @property
+    def reference_in_memory(self) -> bool:
+        """Whether the reference lives in the world's joint memory, the Ruckig part
+        included (views, so a fleet-wide update sees it without a copy)."""
+        return self.memory_columns is not None and isinstance(self._arm_part, slice)
+
+    def _reference_parts(self) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+        """The arm joints' part of the reference arrays, when it is a view (a slice)."""
+        part = self._arm_part
+        if not isinstance(part, slice):
+            return None
+        return self._ref_position[part], self._ref_velocity[part], self._ref_acceleration[part]
 
     @property
     def held_positions(self) -> FloatArray:
@@ -288,31 +342,35 @@ class PositionController(Controller):
             logger.warning("rejected command: %s", exc)
 
     def update(self, stamp: float) -> None:
-        trajectory = self.trajectory
-        assert trajectory is not None  # set by on_activate
         body = self.arm.body
         q, v = body.position, body.velocity
+        trajectory = self.trajectory
+        assert trajectory is not None  # set by on_activate
         part = self._arm_part
-        reference, scratch = self._ref_position, self._scratch
-        reference[part] = trajectory.position
-        self._ref_velocity[part] = trajectory.velocity
-        self._ref_acceleration[part] = trajectory.acceleration
-        # qdd = qdd_ref + kp (q_ref - q) + kd (v_ref - v), in place (this runs at 1 kHz per arm).
-        acceleration = self._acceleration
-        np.subtract(reference, q, out=acceleration)
-        acceleration *= self._kp
-        np.subtract(self._ref_velocity, v, out=scratch)
-        scratch *= self._kd
-        acceleration += scratch
-        acceleration += self._ref_acceleration
-        if self._released.size:
-            acceleration[self._released] = 0.0
-        tau = self.arm.kinematics.inverse_dynamics(q, v, acceleration)
-        np.abs(tau, out=scratch)
-        np.greater(scratch, self._effort_limit, out=self._saturated)
+        if not isinstance(part, slice):  # else the trajectory's arrays are views of these
+            self._ref_position[part] = trajectory.position
+            self._ref_velocity[part] = trajectory.velocity
+            self._ref_acceleration[part] = trajectory.acceleration
+        # qdd = qdd_ref + kp (q_ref - q) + kd (v_ref - v), in place, then the torques
+        # (the same operations as the fleet-wide path, see FleetUpdate).
+        feedback_acceleration(
+            q, v, self._ref_position, self._ref_velocity, self._ref_acceleration,
+            self._kp, self._kd, out=self._acceleration, scratch=self._scratch,
+        )  # fmt: skip
+        self._torque[:] = self.arm.kinematics.rnea(q, v, self._acceleration)
+        clip_torques(
+            self._torque, v, self._damping, self._effort_limit, self._negative_effort_limit,
+            out=body.effort_command, scratch=self._scratch, saturated=self._saturated,
+        )  # fmt: skip
         self.saturation_steps += self._saturated
-        np.minimum(tau, self._effort_limit, out=body.effort_command)
-        np.maximum(body.effort_command, self._negative_effort_limit, out=body.effort_command)
+        self.advance(stamp)
+
+    def advance(self, stamp: float) -> None:
+        """Publish the state (reference and measured at ``stamp``) and move the reference
+        one period on; the last part of :meth:`update` once the torques are written."""
+        trajectory = self.trajectory
+        assert trajectory is not None  # set by on_activate
+        body, part = self.arm.body, self._arm_part
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(
                 self._state_topic,
@@ -322,8 +380,8 @@ class PositionController(Controller):
                     trajectory.position.copy(),
                     trajectory.velocity.copy(),
                     trajectory.acceleration.copy(),
-                    q[part].copy(),
-                    v[part].copy(),
+                    body.position[part].copy(),
+                    body.velocity[part].copy(),
                     trajectory.moving,
                 ),
             )
@@ -331,8 +389,52 @@ class PositionController(Controller):
         if self._anchor_when_stopped and not trajectory.moving:
             # Stopped: hold where the arm is (a contact may have blocked it short of
             # the reference), so it does not keep pushing against what it touched.
-            np.clip(q[part], self.lower, self.upper, out=trajectory.position)
+            np.clip(body.position[part], self.lower, self.upper, out=trajectory.position)
             self._anchor_when_stopped = False
+
+
+def feedback_acceleration(
+    q: FloatArray,
+    v: FloatArray,
+    q_ref: FloatArray,
+    v_ref: FloatArray,
+    a_ref: FloatArray,
+    kp: FloatArray,
+    kd: FloatArray,
+    *,
+    out: FloatArray,
+    scratch: FloatArray,
+) -> None:
+    """``out = (q_ref - q) kp + (v_ref - v) kd + a_ref``, in place (per arm or fleet-wide)."""
+    np.subtract(q_ref, q, out=out)
+    out *= kp
+    np.subtract(v_ref, v, out=scratch)
+    scratch *= kd
+    out += scratch
+    out += a_ref
+
+
+def clip_torques(
+    torque: FloatArray,
+    v: FloatArray,
+    damping: FloatArray,
+    limit: FloatArray,
+    negative_limit: FloatArray,
+    *,
+    out: FloatArray,
+    scratch: FloatArray,
+    saturated: npt.NDArray[np.bool_],
+) -> None:
+    """``out = clip(torque + damping v, +-limit)``; ``saturated`` marks the clipped joints.
+
+    ``torque`` (RNEA's) is changed in place.
+    """
+    np.multiply(damping, v, out=scratch)
+    torque += scratch
+    np.abs(torque, out=scratch)
+    np.greater(scratch, limit, out=saturated)
+    np.minimum(torque, limit, out=out)
+    np.maximum(out, negative_limit, out=out)
 
 
 def as_slice(indices: npt.NDArray[np.int_]) -> slice | npt.NDArray[np.int_]:

@@ -1,0 +1,224 @@
+"""Every arm's controllers updated as their own managers would, fleet-wide where it pays.
+
+An arm whose running controllers are the standard set (joint_state_broadcaster,
+position_controller and, with fingers, gripper_controller), all at the physics
+rate, takes the fleet path:
+
+1. broadcasters: one copy of the state rows of the joint memory; each arm's
+   message holds views of its own columns of that copy;
+2. position controllers: the feedback of every joint in one numpy pass over
+   the joint memory, RNEA per arm, then damping, clipping and the saturation
+   count in one pass; then each arm's state message and Ruckig step;
+3. grippers, arm by arm;
+4. one finiteness check of every effort.
+
+Every other arm (being brought up, in error, running a controller at a slower
+rate) is updated by its own controller manager. Both paths do the same
+floating-point operations on the same numbers, so they give the same torques
+bit for bit (``tests/test_fleet_update.py``); a controller that raises, or
+non-finite torques, fault only their own arm, as in :class:`ControllerManager`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import numpy.typing as npt
+
+from armfleet.controllers.controller_manager import ControllerManager
+from armfleet.controllers.gripper_controller import GripperController
+from armfleet.controllers.joint_state_broadcaster import JointStateBroadcaster
+from armfleet.controllers.position_controller import (
+    PositionController,
+    clip_torques,
+    feedback_acceleration,
+)
+from armfleet.joint_memory import JointMemory, Row
+
+if TYPE_CHECKING:
+    from armfleet.arm import Arm
+
+#: Running controller types (in load order) that the fleet path updates.
+FLEET_CONTROLLER_SETS = (
+    (JointStateBroadcaster.type_name, PositionController.type_name),
+    (JointStateBroadcaster.type_name, PositionController.type_name, GripperController.type_name),
+)
+
+
+@dataclass(frozen=True)
+class _FleetArm:
+    """An arm on the fleet path: its manager, controllers and columns of the memory."""
+
+    manager: ControllerManager
+    broadcaster: JointStateBroadcaster
+    controller: PositionController
+    gripper: GripperController | None
+    columns: slice
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """Who takes which path, for one set of running controllers of every arm."""
+
+    key: tuple[int, ...]
+    fleet: tuple[_FleetArm, ...]
+    others: tuple[ControllerManager, ...]
+    #: Per column of the memory: whether its arm is on the fleet path.
+    mask: npt.NDArray[np.bool_]
+    everyone: bool
+
+
+class FleetUpdate:
+    """The controller updates of a world's arms, one step at a time.
+
+    Args:
+        memory: the world's joint memory.
+    """
+
+    def __init__(self, memory: JointMemory) -> None:
+        self._memory = memory
+        self._arms: list[Arm] = []
+        self._layout = 0
+        self._plan: _Plan | None = None
+
+    def lay_out(self, arms: Iterable[Arm]) -> None:
+        """Give ``arms`` (every arm of the world, in order) their columns of the memory."""
+        self._arms = list(arms)
+        memory = self._memory
+        views = memory.lay_out([len(arm.body.joint_indices) for arm in self._arms])
+        for arm, view in zip(self._arms, views, strict=True):
+            arm.body.bind(
+                view.row(Row.POSITION), view.row(Row.VELOCITY), view.row(Row.EFFORT_COMMAND)
+            )
+            arm.position_controller.bind(view)
+        memory.attach([arm.body for arm in self._arms], views)
+        self._layout += 1
+        self._plan = None
+
+    def update(self, stamp: float, step_index: int) -> None:
+        """Update every arm's running controllers that are due at ``step_index``."""
+        plan = self._current_plan()
+        if plan.fleet:
+            self._update_fleet(plan, stamp)
+        for manager in plan.others:
+            manager.update(stamp, step_index)
+
+    def _current_plan(self) -> _Plan:
+        key = (self._layout, *(arm.controller_manager.version for arm in self._arms))
+        if self._plan is None or self._plan.key != key:
+            self._plan = self._make_plan(key)
+        return self._plan
+
+    def _make_plan(self, key: tuple[int, ...]) -> _Plan:
+        fleet: list[_FleetArm] = []
+        others: list[ControllerManager] = []
+        mask = np.zeros(self._memory.size, dtype=bool)
+        for arm in self._arms:
+            entry = _fleet_arm(arm)
+            if entry is None:
+                others.append(arm.controller_manager)
+            else:
+                fleet.append(entry)
+                mask[entry.columns] = True
+        return _Plan(key, tuple(fleet), tuple(others), mask, bool(mask.all()))
+
+    def _update_fleet(self, plan: _Plan, stamp: float) -> None:
+        block = self._memory.block
+        failed: list[tuple[_FleetArm, Exception]] = []
+        # 1. Broadcasters: the state and efforts as they are before this update.
+        sample = block[Row.POSITION : Row.EFFORT_COMMAND + 1].copy()
+        alive: list[_FleetArm] = []
+        for arm in plan.fleet:
+            columns = arm.columns
+            try:
+                arm.broadcaster.publish(
+                    stamp, sample[0, columns], sample[1, columns], sample[2, columns]
+                )
+            except Exception as exc:  # contain it to this arm
+                arm.manager.fail_controller(arm.broadcaster, exc)
+            else:
+                alive.append(arm)
+        # 2. Position controllers.
+        q, v = block[Row.POSITION], block[Row.VELOCITY]
+        acceleration, torque = block[Row.ACCELERATION], block[Row.TORQUE]
+        feedback_acceleration(
+            q, v, block[Row.REFERENCE_POSITION], block[Row.REFERENCE_VELOCITY],
+            block[Row.REFERENCE_ACCELERATION], block[Row.KP], block[Row.KD],
+            out=acceleration, scratch=block[Row.SCRATCH],
+        )  # fmt: skip
+        torqued: list[_FleetArm] = []
+        for arm in alive:
+            columns = arm.columns
+            try:
+                torque[columns] = arm.controller.arm.kinematics.rnea(
+                    q[columns], v[columns], acceleration[columns]
+                )
+            except Exception as error:  # its torques are not written; faulted below
+                failed.append((arm, error))
+            else:
+                torqued.append(arm)
+        self._write_torques(plan, torqued)
+        moving: list[_FleetArm] = []
+        for arm in torqued:
+            try:
+                arm.controller.advance(stamp)
+            except Exception as error:
+                failed.append((arm, error))
+            else:
+                moving.append(arm)
+        for arm, cause in failed:  # after the torques: a fault zeroes the arm's efforts
+            arm.manager.fail_controller(arm.controller, cause)
+        # 3. Grippers.
+        for arm in moving:
+            if arm.gripper is not None:
+                try:
+                    arm.gripper.update(stamp)
+                except Exception as exc:
+                    arm.manager.fail_controller(arm.gripper, exc)
+        # 4. Finite efforts (a dot product is NaN or inf whenever an element is).
+        effort = block[Row.EFFORT_COMMAND]
+        if not math.isfinite(effort.dot(effort)):
+            for arm in plan.fleet:
+                arm.manager.check_efforts()
+
+    def _write_torques(self, plan: _Plan, arms: list[_FleetArm]) -> None:
+        """Damping, clipping and saturation count of ``arms`` (their RNEA torques are in)."""
+        memory, block = self._memory, self._memory.block
+        everyone = plan.everyone and len(arms) == len(plan.fleet)
+        clipped = block[Row.EFFORT_COMMAND] if everyone else block[Row.CLIPPED_TORQUE]
+        clip_torques(
+            block[Row.TORQUE], block[Row.VELOCITY], block[Row.DAMPING], block[Row.EFFORT_LIMIT],
+            block[Row.NEGATIVE_EFFORT_LIMIT], out=clipped, scratch=block[Row.SCRATCH],
+            saturated=memory.saturated,
+        )  # fmt: skip
+        if not everyone:
+            mask = plan.mask
+            if len(arms) != len(plan.fleet):
+                mask = np.zeros_like(mask)
+                for arm in arms:
+                    mask[arm.columns] = True
+            np.copyto(block[Row.EFFORT_COMMAND], clipped, where=mask)
+            np.logical_and(memory.saturated, mask, out=memory.saturated)
+        memory.saturation_steps += memory.saturated
+
+
+def _fleet_arm(arm: Arm) -> _FleetArm | None:
+    """``arm`` as a fleet-path arm, or None if its own manager must update it."""
+    manager, controller = arm.controller_manager, arm.position_controller
+    running = manager.running
+    if (
+        manager.fault is not None
+        or tuple(c.type_name for c in running) not in FLEET_CONTROLLER_SETS
+        or any(c.period_steps != 1 for c in running)
+        or not controller.reference_in_memory
+        or controller.memory_columns is None
+    ):
+        return None
+    gripper = running[2] if len(running) == 3 else None
+    assert isinstance(running[0], JointStateBroadcaster)
+    assert gripper is None or isinstance(gripper, GripperController)
+    return _FleetArm(manager, running[0], controller, gripper, controller.memory_columns)

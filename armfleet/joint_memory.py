@@ -1,0 +1,141 @@
+"""Every arm's joint arrays laid end to end, and their exchange with PyBullet.
+
+ros2_control keeps the state and command interfaces of all hardware in one
+resource manager; a world keeps them in one block, a row per quantity and a
+column per movable joint, arm after arm. Each arm's arrays (``ArmBody.position``,
+its position controller's reference, gains, limits ...) are views of its own
+columns, so an arm still sees only its joints, while a fleet-wide operation
+(read the physics, compute every arm's feedback, clip every torque) is one
+call over a row instead of one call per arm.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import pybullet as p
+
+from armfleet.arm_body import ArmBody
+from armfleet.messages import FloatArray
+
+
+class Row(enum.IntEnum):
+    """The quantities kept per joint (one row of the block each)."""
+
+    # The hardware interface: state and command (kept adjacent, copied together).
+    POSITION = 0
+    VELOCITY = 1
+    EFFORT_COMMAND = 2
+    # The position controller's reference, gains and limits.
+    REFERENCE_POSITION = 3
+    REFERENCE_VELOCITY = 4
+    REFERENCE_ACCELERATION = 5
+    KP = 6
+    KD = 7
+    DAMPING = 8
+    EFFORT_LIMIT = 9
+    NEGATIVE_EFFORT_LIMIT = 10
+    # Scratch rows of the control law.
+    ACCELERATION = 11
+    TORQUE = 12
+    CLIPPED_TORQUE = 13
+    SCRATCH = 14
+
+
+@dataclass(frozen=True)
+class JointViews:
+    """One arm's columns of every row of a :class:`JointMemory` (views, not copies).
+
+    Attributes:
+        columns: the arm's columns in the block.
+        rows: the arm's part of each :class:`Row` (index with ``Row.X``).
+        saturation_steps: the arm's part of the per-joint count of clipped torques.
+    """
+
+    columns: slice
+    rows: FloatArray
+    saturation_steps: npt.NDArray[np.int64]
+
+    def row(self, row: Row) -> FloatArray:
+        view: FloatArray = self.rows[row]
+        return view
+
+
+class JointMemory:
+    """The joint block of one world (see the module docstring).
+
+    Args:
+        client: PyBullet physics client id of the world.
+    """
+
+    def __init__(self, client: int) -> None:
+        self._client = client
+        self.block: FloatArray = np.zeros((len(Row), 0))
+        self.saturation_steps: npt.NDArray[np.int64] = np.zeros(0, dtype=np.int64)
+        self.saturated: npt.NDArray[np.bool_] = np.zeros(0, dtype=bool)
+        self._bodies: list[tuple[int, list[int], int, int]] = []
+        self._arm_bodies: list[ArmBody] = []
+
+    @property
+    def size(self) -> int:
+        """Number of joints (columns)."""
+        return int(self.block.shape[1])
+
+    def row(self, row: Row) -> FloatArray:
+        view: FloatArray = self.block[row]
+        return view
+
+    def lay_out(self, sizes: Sequence[int]) -> list[JointViews]:
+        """Make a new block with ``sizes[i]`` columns for arm ``i``; return each arm's views.
+
+        The caller copies each arm's values into its new views (the old block is
+        dropped): see :meth:`ArmBody.bind` and ``PositionController.bind``.
+        """
+        total = sum(sizes)
+        self.block = np.zeros((len(Row), total))
+        self.saturation_steps = np.zeros(total, dtype=np.int64)
+        self.saturated = np.zeros(total, dtype=bool)
+        views = []
+        start = 0
+        for size in sizes:
+            columns = slice(start, start + size)
+            views.append(
+                JointViews(columns, self.block[:, columns], self.saturation_steps[columns])
+            )
+            start += size
+        return views
+
+    def attach(self, bodies: Sequence[ArmBody], views: Sequence[JointViews]) -> None:
+        """The bodies whose joints the block holds, in column order (after :meth:`lay_out`)."""
+        self._arm_bodies = list(bodies)
+        self._bodies = [
+            (body.body_id, body.joint_indices, view.columns.start, view.columns.stop)
+            for body, view in zip(bodies, views, strict=True)
+        ]
+
+    def read(self) -> None:
+        """Fill the position and velocity rows of every arm from the physics engine."""
+        client = self._client
+        states: list[tuple[float, ...]] = []
+        for body_id, joints, _, _ in self._bodies:
+            states += p.getJointStates(body_id, joints, physicsClientId=client)
+        block = self.block
+        block[Row.POSITION] = [state[0] for state in states]
+        block[Row.VELOCITY] = [state[1] for state in states]
+
+    def write(self) -> None:
+        """Send every arm's effort command to the physics engine (braked arms: nothing)."""
+        client = self._client
+        forces = self.block[Row.EFFORT_COMMAND].tolist()
+        for body, (body_id, joints, start, stop) in zip(
+            self._arm_bodies, self._bodies, strict=True
+        ):
+            if body.torque_mode:
+                p.setJointMotorControlArray(
+                    body_id, joints, p.TORQUE_CONTROL, forces=forces[start:stop],
+                    physicsClientId=client,
+                )  # fmt: skip
