@@ -75,6 +75,7 @@ class JointMemory:
     def __init__(self, client: int) -> None:
         self._client = client
         self.block: FloatArray = np.zeros((len(Row), 0))
+        self.rows: tuple[FloatArray, ...] = tuple(self.block)
         self.saturation_steps: npt.NDArray[np.int64] = np.zeros(0, dtype=np.int64)
         self.saturated: npt.NDArray[np.bool_] = np.zeros(0, dtype=bool)
         self._bodies: list[tuple[int, list[int], int, int]] = []
@@ -85,10 +86,6 @@ class JointMemory:
         """Number of joints (columns)."""
         return int(self.block.shape[1])
 
-    def row(self, row: Row) -> FloatArray:
-        view: FloatArray = self.block[row]
-        return view
-
     def lay_out(self, sizes: Sequence[int]) -> list[JointViews]:
         """Make a new block with ``sizes[i]`` columns for arm ``i``; return each arm's views.
 
@@ -97,6 +94,9 @@ class JointMemory:
         """
         total = sum(sizes)
         self.block = np.zeros((len(Row), total))
+        #: The rows of the block as views, in :class:`Row` order (indexing the block
+        #: with a Row at every step would cost more than the arithmetic for a few arms).
+        self.rows = tuple(self.block[row] for row in Row)
         self.saturation_steps = np.zeros(total, dtype=np.int64)
         self.saturated = np.zeros(total, dtype=bool)
         views = []
@@ -123,14 +123,14 @@ class JointMemory:
         states: list[tuple[float, ...]] = []
         for body_id, joints, _, _ in self._bodies:
             states += p.getJointStates(body_id, joints, physicsClientId=client)
-        block = self.block
-        block[Row.POSITION] = [state[0] for state in states]
-        block[Row.VELOCITY] = [state[1] for state in states]
+        rows = self.rows
+        rows[0][:] = [state[0] for state in states]  # Row.POSITION
+        rows[1][:] = [state[1] for state in states]  # Row.VELOCITY
 
     def write(self) -> None:
         """Send every arm's effort command to the physics engine (braked arms: nothing)."""
         client = self._client
-        forces = self.block[Row.EFFORT_COMMAND].tolist()
+        forces = self.rows[Row.EFFORT_COMMAND].tolist()
         for body, (body_id, joints, start, stop) in zip(
             self._arm_bodies, self._bodies, strict=True
         ):

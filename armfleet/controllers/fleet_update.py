@@ -127,10 +127,14 @@ class FleetUpdate:
         return _Plan(key, tuple(fleet), tuple(others), mask, bool(mask.all()))
 
     def _update_fleet(self, plan: _Plan, stamp: float) -> None:
-        block = self._memory.block
+        memory = self._memory
+        # The rows, in Row order.
+        (q, v, effort, q_ref, v_ref, a_ref, kp, kd, _, _, _, acceleration, torque, _, scratch) = (
+            memory.rows
+        )
         failed: list[tuple[_FleetArm, Exception]] = []
         # 1. Broadcasters: the state and efforts as they are before this update.
-        sample = block[Row.POSITION : Row.EFFORT_COMMAND + 1].copy()
+        sample = memory.block[Row.POSITION : Row.EFFORT_COMMAND + 1].copy()
         alive: list[_FleetArm] = []
         for arm in plan.fleet:
             columns = arm.columns
@@ -143,12 +147,8 @@ class FleetUpdate:
             else:
                 alive.append(arm)
         # 2. Position controllers.
-        q, v = block[Row.POSITION], block[Row.VELOCITY]
-        acceleration, torque = block[Row.ACCELERATION], block[Row.TORQUE]
         feedback_acceleration(
-            q, v, block[Row.REFERENCE_POSITION], block[Row.REFERENCE_VELOCITY],
-            block[Row.REFERENCE_ACCELERATION], block[Row.KP], block[Row.KD],
-            out=acceleration, scratch=block[Row.SCRATCH],
+            q, v, q_ref, v_ref, a_ref, kp, kd, out=acceleration, scratch=scratch
         )  # fmt: skip
         torqued: list[_FleetArm] = []
         for arm in alive:
@@ -180,19 +180,20 @@ class FleetUpdate:
                 except Exception as exc:
                     arm.manager.fail_controller(arm.gripper, exc)
         # 4. Finite efforts (a dot product is NaN or inf whenever an element is).
-        effort = block[Row.EFFORT_COMMAND]
         if not math.isfinite(effort.dot(effort)):
             for arm in plan.fleet:
                 arm.manager.check_efforts()
 
     def _write_torques(self, plan: _Plan, arms: list[_FleetArm]) -> None:
         """Damping, clipping and saturation count of ``arms`` (their RNEA torques are in)."""
-        memory, block = self._memory, self._memory.block
+        memory = self._memory
+        rows = memory.rows
+        effort = rows[Row.EFFORT_COMMAND]
         everyone = plan.everyone and len(arms) == len(plan.fleet)
-        clipped = block[Row.EFFORT_COMMAND] if everyone else block[Row.CLIPPED_TORQUE]
+        clipped = effort if everyone else rows[Row.CLIPPED_TORQUE]
         clip_torques(
-            block[Row.TORQUE], block[Row.VELOCITY], block[Row.DAMPING], block[Row.EFFORT_LIMIT],
-            block[Row.NEGATIVE_EFFORT_LIMIT], out=clipped, scratch=block[Row.SCRATCH],
+            rows[Row.TORQUE], rows[Row.VELOCITY], rows[Row.DAMPING], rows[Row.EFFORT_LIMIT],
+            rows[Row.NEGATIVE_EFFORT_LIMIT], out=clipped, scratch=rows[Row.SCRATCH],
             saturated=memory.saturated,
         )  # fmt: skip
         if not everyone:
@@ -201,7 +202,7 @@ class FleetUpdate:
                 mask = np.zeros_like(mask)
                 for arm in arms:
                     mask[arm.columns] = True
-            np.copyto(block[Row.EFFORT_COMMAND], clipped, where=mask)
+            np.copyto(effort, clipped, where=mask)
             np.logical_and(memory.saturated, mask, out=memory.saturated)
         memory.saturation_steps += memory.saturated
 
