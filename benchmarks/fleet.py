@@ -5,7 +5,8 @@ For N Pandas on a 1 m grid at a 1 ms step it measures, per physics step:
   (b) motors - PyBullet's built-in POSITION_CONTROL following a target each step;
   (c) stack  - armfleet's full step: broadcasters, Ruckig, Pinocchio, torque writes,
                contacts, every arm following random reachable targets.
-It prints medians (min-max over repeats), the ratios c/a and c/b, the real-time
+The three take turns, repeat by repeat, so a drift in the machine's speed hits all
+three alike. It prints medians (min-max over repeats), the ratios c/a and c/b, the real-time
 factor, the bring-up time of 30 arms, peak RSS with 30 arms, and the tracking
 error of armfleet vs the built-in motors on the same Ruckig trajectory; and writes
 benchmarks/results/fleet.json.
@@ -88,8 +89,6 @@ def measure(arms: int, repeats: int, steps: int, seed: int) -> dict[str, object]
                 body, joints, p.VELOCITY_CONTROL, forces=[0.0] * len(joints), physicsClientId=client
             )
 
-    bare = timed(repeats, steps, bare_prepare, lambda: p.stepSimulation(physicsClientId=client))
-
     targets = {body: [0.0] * len(joints) for body, joints in bodies}
 
     def motors_prepare() -> None:
@@ -106,14 +105,24 @@ def measure(arms: int, repeats: int, steps: int, seed: int) -> dict[str, object]
             )  # fmt: skip
         p.stepSimulation(physicsClientId=client)
 
-    motors = timed(repeats, steps, motors_prepare, motors_step)
-
-    restore()
-    for arm in world.arms.values():  # back to the stack: torque mode, holding
+    for arm in world.arms.values():  # the stack: torque mode, holding
         arm.body.release_brakes()
     world.run(0.05)
     rng = np.random.default_rng(seed)
-    stack = timed(repeats, steps, lambda: random_targets(world, rng), world.step)
+    bare: list[float] = []
+    motors: list[float] = []
+    stack: list[float] = []
+    # Interleaved (a, b, c, a, b, c, ...): the three see the same machine, whose speed
+    # drifts over minutes. The stack resumes from where it left off each time.
+    for _ in range(repeats):
+        paused = p.saveState(physicsClientId=client)
+        bare += timed(1, steps, bare_prepare, lambda: p.stepSimulation(physicsClientId=client))
+        motors += timed(1, steps, motors_prepare, motors_step)
+        p.restoreState(paused, physicsClientId=client)
+        p.removeState(paused, physicsClientId=client)
+        for arm in world.arms.values():  # PyBullet's motors off again
+            arm.body.release_brakes()
+        stack += timed(1, steps, lambda: random_targets(world, rng), world.step)
     world.close()
     a, b, c = (statistics.median(x) for x in (bare, motors, stack))
     return {
