@@ -78,8 +78,8 @@ class JointMemory:
         self.rows: tuple[FloatArray, ...] = tuple(self.block)
         self.saturation_steps: npt.NDArray[np.int64] = np.zeros(0, dtype=np.int64)
         self.saturated: npt.NDArray[np.bool_] = np.zeros(0, dtype=bool)
-        self._bodies: list[tuple[int, list[int], int, int]] = []
-        self._arm_bodies: list[ArmBody] = []
+        #: The bodies whose joints the block holds, with their first and end column.
+        self._bodies: list[tuple[ArmBody, int, int]] = []
 
     @property
     def size(self) -> int:
@@ -111,9 +111,8 @@ class JointMemory:
 
     def attach(self, bodies: Sequence[ArmBody], views: Sequence[JointViews]) -> None:
         """The bodies whose joints the block holds, in column order (after :meth:`lay_out`)."""
-        self._arm_bodies = list(bodies)
         self._bodies = [
-            (body.body_id, body.joint_indices, view.columns.start, view.columns.stop)
+            (body, view.columns.start, view.columns.stop)
             for body, view in zip(bodies, views, strict=True)
         ]
 
@@ -121,21 +120,18 @@ class JointMemory:
         """Fill the position and velocity rows of every arm from the physics engine."""
         client = self._client
         states: list[tuple[float, ...]] = []
-        for body_id, joints, _, _ in self._bodies:
-            states += p.getJointStates(body_id, joints, physicsClientId=client)
-        rows = self.rows
-        rows[0][:] = [state[0] for state in states]  # Row.POSITION
-        rows[1][:] = [state[1] for state in states]  # Row.VELOCITY
+        for body, _, _ in self._bodies:
+            states += p.getJointStates(body.body_id, body.joint_indices, physicsClientId=client)
+        self.rows[Row.POSITION][:] = [state[0] for state in states]
+        self.rows[Row.VELOCITY][:] = [state[1] for state in states]
 
     def write(self) -> None:
         """Send every arm's effort command to the physics engine (braked arms: nothing)."""
         client = self._client
         forces = self.rows[Row.EFFORT_COMMAND].tolist()
-        for body, (body_id, joints, start, stop) in zip(
-            self._arm_bodies, self._bodies, strict=True
-        ):
+        for body, start, stop in self._bodies:
             if body.torque_mode:
                 p.setJointMotorControlArray(
-                    body_id, joints, p.TORQUE_CONTROL, forces=forces[start:stop],
-                    physicsClientId=client,
+                    body.body_id, body.joint_indices, p.TORQUE_CONTROL,
+                    forces=forces[start:stop], physicsClientId=client,
                 )  # fmt: skip

@@ -4,8 +4,6 @@ in test_control_law.py)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import numpy as np
 import pytest
 
@@ -18,10 +16,14 @@ ARMS = (("bob", "panda", (0.0, 0.0)), ("toby", "panda", (1.0, 0.0)), ("ursula", 
 GAINS = {"bob": (2500.0, 100.0), "toby": (900.0, 60.0), "ursula": (1600.0, 80.0)}
 
 
-def scripted_run(slow_arm: str | None = None) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Yield (efforts, positions) of every arm at each step of one scripted scene.
+Trace = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
 
-    The scene moves every arm with random targets, closes and opens the grippers, and
+
+def scripted_run(slow_arm: str | None = None) -> Trace:
+    """Every arm's efforts and positions at each step of one scripted scene, and the
+    saturation counts at its end.
+
+    The scene moves every arm with random targets, closes and opens bob's gripper, and
     pushes one arm (bob) into a joint-torque limit so clipping and saturation count.
     """
     rng = np.random.default_rng(11)
@@ -35,6 +37,7 @@ def scripted_run(slow_arm: str | None = None) -> Iterator[tuple[np.ndarray, np.n
         arms = list(world.arms.values())
         bob = world.arm("bob")
         assert bob.gripper is not None
+        efforts, positions = [], []
         for step in range(1500):
             if step % 300 == 0:
                 for arm in arms:
@@ -48,17 +51,11 @@ def scripted_run(slow_arm: str | None = None) -> Iterator[tuple[np.ndarray, np.n
             if step == 1000:  # a sudden pull on one joint: the torques clip
                 bob.position_controller.trajectory.position[1] += 0.3  # type: ignore[union-attr]
             world.step()
-            yield (
-                np.concatenate([arm.body.effort_command for arm in arms]),
-                np.concatenate([arm.body.position for arm in arms]),
-            )
+            efforts.append(np.concatenate([arm.body.effort_command for arm in arms]))
+            positions.append(np.concatenate([arm.body.position for arm in arms]))
         saturation = np.concatenate([arm.position_controller.saturation_steps for arm in arms])
-        assert saturation.sum() > 0  # the pull did clip
-        yield saturation.astype(float), np.zeros(0)
-
-
-def run_to_list(slow_arm: str | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
-    return list(scripted_run(slow_arm))
+    assert saturation.sum() > 0  # the pull did clip
+    return efforts, positions, saturation
 
 
 def each_arm_on_its_own(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -66,23 +63,20 @@ def each_arm_on_its_own(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(fleet_update, "_fleet_arm", lambda arm: None)
 
 
-def assert_identical(
-    fleet: list[tuple[np.ndarray, np.ndarray]], plain: list[tuple[np.ndarray, np.ndarray]]
-) -> None:
-    assert len(fleet) == len(plain)
-    for step, ((effort_a, position_a), (effort_b, position_b)) in enumerate(
-        zip(fleet, plain, strict=True)
-    ):
-        assert np.array_equal(effort_a, effort_b), f"efforts differ at step {step}"
-        assert np.array_equal(position_a, position_b), f"positions differ at step {step}"
+def assert_identical(fleet: Trace, plain: Trace) -> None:
+    for name, a, b in zip(("efforts", "positions"), fleet[:2], plain[:2], strict=True):
+        assert len(a) == len(b)
+        for step, (x, y) in enumerate(zip(a, b, strict=True)):
+            assert np.array_equal(x, y), f"{name} differ at step {step}"
+    assert np.array_equal(fleet[2], plain[2]), "saturation counts differ"
 
 
 def test_fleet_path_equals_each_arm_on_its_own_bit_for_bit(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    fleet = run_to_list()
+    fleet = scripted_run()
     each_arm_on_its_own(monkeypatch)
-    assert_identical(fleet, run_to_list())
+    assert_identical(fleet, scripted_run())
 
 
 def test_an_arm_at_another_rate_beside_the_fleet_path_changes_nothing(
@@ -90,9 +84,9 @@ def test_an_arm_at_another_rate_beside_the_fleet_path_changes_nothing(
 ) -> None:
     """One arm at 500 Hz takes its own path while the others take the fleet path: the
     fleet-wide operations must leave its efforts alone."""
-    mixed = run_to_list(slow_arm="toby")
+    mixed = scripted_run(slow_arm="toby")
     each_arm_on_its_own(monkeypatch)
-    assert_identical(mixed, run_to_list(slow_arm="toby"))
+    assert_identical(mixed, scripted_run(slow_arm="toby"))
 
 
 def test_standard_arms_take_the_fleet_path(monkeypatch: pytest.MonkeyPatch) -> None:

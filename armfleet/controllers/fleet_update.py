@@ -64,6 +64,7 @@ class _FleetArm:
 class _Plan:
     """Who takes which path, for one set of running controllers of every arm."""
 
+    #: The controller managers' versions it was made for.
     key: tuple[int, ...]
     fleet: tuple[_FleetArm, ...]
     others: tuple[ControllerManager, ...]
@@ -82,7 +83,6 @@ class FleetUpdate:
     def __init__(self, memory: JointMemory) -> None:
         self._memory = memory
         self._arms: list[Arm] = []
-        self._layout = 0
         self._plan: _Plan | None = None
 
     def lay_out(self, arms: Iterable[Arm]) -> None:
@@ -96,7 +96,6 @@ class FleetUpdate:
             )
             arm.position_controller.bind(view)
         memory.attach([arm.body for arm in self._arms], views)
-        self._layout += 1
         self._plan = None
 
     def update(self, stamp: float, step_index: int) -> None:
@@ -108,7 +107,7 @@ class FleetUpdate:
             manager.update(stamp, step_index)
 
     def _current_plan(self) -> _Plan:
-        key = (self._layout, *(arm.controller_manager.version for arm in self._arms))
+        key = tuple(arm.controller_manager.version for arm in self._arms)
         if self._plan is None or self._plan.key != key:
             self._plan = self._make_plan(key)
         return self._plan
@@ -128,10 +127,9 @@ class FleetUpdate:
 
     def _update_fleet(self, plan: _Plan, stamp: float) -> None:
         memory = self._memory
-        # The rows, in Row order.
-        (q, v, effort, q_ref, v_ref, a_ref, kp, kd, _, _, _, acceleration, torque, _, scratch) = (
-            memory.rows
-        )
+        rows = memory.rows
+        q, v, effort = rows[Row.POSITION], rows[Row.VELOCITY], rows[Row.EFFORT_COMMAND]
+        acceleration, torque = rows[Row.ACCELERATION], rows[Row.TORQUE]
         failed: list[tuple[_FleetArm, Exception]] = []
         # 1. Broadcasters: the state and efforts as they are before this update.
         sample = memory.block[Row.POSITION : Row.EFFORT_COMMAND + 1].copy()
@@ -148,7 +146,9 @@ class FleetUpdate:
                 alive.append(arm)
         # 2. Position controllers.
         feedback_acceleration(
-            q, v, q_ref, v_ref, a_ref, kp, kd, out=acceleration, scratch=scratch
+            q, v, rows[Row.REFERENCE_POSITION], rows[Row.REFERENCE_VELOCITY],
+            rows[Row.REFERENCE_ACCELERATION], rows[Row.KP], rows[Row.KD],
+            out=acceleration, scratch=rows[Row.SCRATCH],
         )  # fmt: skip
         torqued: list[_FleetArm] = []
         for arm in alive:
