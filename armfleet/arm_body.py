@@ -15,11 +15,12 @@ import numpy as np
 import pybullet as p
 
 from armfleet.errors import DescriptionError
+from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
 
 #: Load flags: inertias from the file (so PyBullet and Pinocchio dynamics
-#: agree) and no visual shapes (PyBullet renders nothing here; the viewer
-#: takes visuals from Pinocchio).
+#: agree, with Bullet's link damping off: see link_damping.py) and no visual
+#: shapes (PyBullet renders nothing here; the viewer takes visuals from Pinocchio).
 LOAD_FLAGS = (
     p.URDF_USE_INERTIA_FROM_FILE
     | p.URDF_IGNORE_VISUAL_SHAPES
@@ -52,6 +53,7 @@ class ArmBody:
             raise DescriptionError(f"PyBullet cannot load the URDF: {exc}") from exc
         finally:
             os.unlink(path)
+        disable_link_damping(self.body_id, client)
         self._link_index: dict[str, int] = {}
         #: Per link index: (parent link index, whether its joint moves).
         self.link_parents: dict[int, tuple[int, bool]] = {}

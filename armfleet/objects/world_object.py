@@ -16,6 +16,7 @@ import pinocchio as pin
 import pybullet as p
 
 from armfleet.errors import ObjectError
+from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import ObjectSpec, Shape, pose_matrix
 
@@ -57,6 +58,7 @@ class WorldObject:
             rollingFriction=spec.rolling_friction_m,
             physicsClientId=client,
         )
+        disable_link_damping(self._body_id, client)  # no drag that physics lacks
         self._pose: FloatArray | None = None
         self._removed = False
 
