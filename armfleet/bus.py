@@ -4,6 +4,19 @@ Callbacks run synchronously in the publishing thread (the one stepping the
 world), so the world stays single-threaded and deterministic. Latched topics
 (like ROS transient-local ``/tf_static``) replay their messages to late
 subscribers.
+
+Subscribers are isolated from the publisher: a callback that raises is logged
+once (topic, callback, traceback), counted in :attr:`Bus.failures` and dropped;
+the publisher (a broadcaster inside a controller update, an arm sending a
+command) never sees the exception, so a bug in a passive listener (logging,
+plotting, a recorder) cannot stop a robot. The one exception is a subscriber
+that owns its failures: the controllers' own command subscriptions pass
+``on_error`` (their controller's :meth:`~armfleet.controllers.Controller.fail`),
+because a command half-applied by a broken controller must put its arm in
+``error`` rather than be skipped.
+
+Topics can go away (:meth:`Bus.unadvertise`, when an arm is removed); their
+subscribers are told through ``on_gone``.
 """
 
 from __future__ import annotations
@@ -20,6 +33,8 @@ from armfleet.errors import ArmfleetError
 logger = logging.getLogger("armfleet")
 
 Callback = Callable[[Any], None]
+ErrorHandler = Callable[[Exception], None]
+GoneHandler = Callable[[str], None]
 TOPIC_PATTERN = re.compile(r"^(/[a-z][a-z0-9_]*)+$")
 
 
@@ -27,13 +42,46 @@ class TopicError(ArmfleetError):
     """A malformed topic name, or a message of the wrong type for a topic."""
 
 
+@dataclass(frozen=True)
+class SubscriberFailure:
+    """A subscriber the bus dropped because its callback raised.
+
+    Attributes:
+        topic: the topic it listened to (``*`` for a :meth:`Bus.subscribe_all` tap).
+        callback: the callback's qualified name.
+        error: the exception it raised.
+    """
+
+    topic: str
+    callback: str
+    error: Exception
+
+    def __str__(self) -> str:
+        return (
+            f"subscriber {self.callback} of {self.topic} raised "
+            f"{type(self.error).__name__}: {self.error}; it was dropped"
+        )
+
+
 @dataclass(eq=False)
 class Subscription:
-    """Handle returned by :meth:`Bus.subscribe`; call :meth:`cancel` to stop."""
+    """Handle returned by :meth:`Bus.subscribe`; call :meth:`cancel` to stop.
+
+    Attributes:
+        failure: why the bus dropped it (its callback raised), or None.
+    """
 
     topic: str
     callback: Callback
     _bus: Bus | None = field(repr=False, default=None)
+    on_error: ErrorHandler | None = field(repr=False, default=None)
+    on_gone: GoneHandler | None = field(repr=False, default=None)
+    failure: SubscriberFailure | None = None
+
+    @property
+    def active(self) -> bool:
+        """Whether messages still reach the callback (not cancelled, not dropped)."""
+        return self._bus is not None
 
     def cancel(self) -> None:
         if self._bus is not None:
@@ -43,10 +91,19 @@ class Subscription:
 
 @dataclass(eq=False)
 class Tap:
-    """Handle returned by :meth:`Bus.subscribe_all`; call :meth:`cancel` to stop."""
+    """Handle returned by :meth:`Bus.subscribe_all`; call :meth:`cancel` to stop.
+
+    Attributes:
+        failure: why the bus dropped it (its callback raised), or None.
+    """
 
     callback: Callable[[str, Any], None]
     _bus: Bus | None = field(repr=False, default=None)
+    failure: SubscriberFailure | None = None
+
+    @property
+    def active(self) -> bool:
+        return self._bus is not None
 
     def cancel(self) -> None:
         if self._bus is not None and self in self._bus._taps:
@@ -62,6 +119,7 @@ class Bus:
         self._types: dict[str, type] = {}
         self._latched: dict[str, list[Any]] = defaultdict(list)
         self._taps: list[Tap] = []
+        self._failures: list[SubscriberFailure] = []
 
     def advertise(self, topic: str, message_type: type) -> None:
         """Declare ``topic`` to carry ``message_type``; later publishes are type-checked."""
@@ -70,21 +128,64 @@ class Bus:
         if known is not message_type:
             raise TopicError(f"topic {topic} carries {known.__name__}, not {message_type.__name__}")
 
+    def unadvertise(self, namespace: str) -> list[str]:
+        """Withdraw every topic under ``namespace`` (``/ned``: ``/ned/joint_states`` ...).
+
+        Their types and latched messages are forgotten, so they leave
+        :attr:`topics`; each of their subscribers is told through its ``on_gone``
+        (and stays subscribed: a topic advertised again under the same name, e.g.
+        by a new arm of the same name, reaches it again).
+
+        Returns:
+            The withdrawn topics.
+        """
+        _check_name(namespace)
+        prefix = namespace + "/"
+        gone = [t for t in self._types if t.startswith(prefix)]
+        for topic in gone:
+            del self._types[topic]
+            self._latched.pop(topic, None)
+        for topic in gone:
+            for subscription in tuple(self._subscriptions.get(topic, ())):
+                if subscription.on_gone is not None:
+                    self._call(subscription, subscription.on_gone, topic)
+        return gone
+
     @property
     def topics(self) -> dict[str, type]:
         """Advertised topics and their message types."""
         return dict(self._types)
 
-    def subscribe(self, topic: str, callback: Callback) -> Subscription:
+    @property
+    def failures(self) -> tuple[SubscriberFailure, ...]:
+        """The subscribers dropped so far because their callback raised, oldest first."""
+        return tuple(self._failures)
+
+    def subscribe(
+        self,
+        topic: str,
+        callback: Callback,
+        *,
+        on_error: ErrorHandler | None = None,
+        on_gone: GoneHandler | None = None,
+    ) -> Subscription:
         """Call ``callback(message)`` for every message on ``topic``.
 
         Latched messages already published on ``topic`` are delivered at once.
+
+        Args:
+            on_error: called with the exception if ``callback`` raises, for a
+                subscriber that must handle its own failures (a controller's command
+                subscription). Without it a raising callback is logged, counted in
+                :attr:`failures` and dropped; the publisher never sees the exception.
+            on_gone: called with the topic when it is withdrawn (:meth:`unadvertise`).
         """
         _check_name(topic)
-        subscription = Subscription(topic, callback, self)
+        subscription = Subscription(topic, callback, self, on_error, on_gone)
         self._subscriptions[topic].append(subscription)
         for message in self._latched.get(topic, ()):
-            callback(message)
+            if not self._call(subscription, callback, message):
+                break
         return subscription
 
     def subscribe_all(self, callback: Callable[[str, Any], None]) -> Tap:
@@ -117,18 +218,54 @@ class Bus:
         if latch:
             self._latched[topic].append(message)
         for subscription in tuple(self._subscriptions.get(topic, ())):
-            subscription.callback(message)
+            try:
+                subscription.callback(message)
+            except Exception as exc:
+                self._failed(subscription, exc)
         for tap in tuple(self._taps):
-            tap.callback(topic, message)
+            try:
+                tap.callback(topic, message)
+            except Exception as exc:
+                self._failed(tap, exc)
 
     def forget_latched(self, topic: str, predicate: Callable[[Any], bool]) -> None:
         """Drop latched messages of ``topic`` for which ``predicate`` is true."""
         self._latched[topic] = [m for m in self._latched.get(topic, []) if not predicate(m)]
 
+    def _call(self, subscription: Subscription, function: Callable[[Any], None], arg: Any) -> bool:
+        """``function(arg)`` on behalf of ``subscription``; False if it raised."""
+        try:
+            function(arg)
+        except Exception as exc:
+            self._failed(subscription, exc)
+            return False
+        return True
+
+    def _failed(self, subscriber: Subscription | Tap, exc: Exception) -> None:
+        """A subscriber's callback raised ``exc``: its owner handles it, or it is dropped."""
+        if isinstance(subscriber, Subscription) and subscriber.on_error is not None:
+            subscriber.on_error(exc)
+            return
+        topic = subscriber.topic if isinstance(subscriber, Subscription) else "*"
+        failure = SubscriberFailure(topic, _callback_name(subscriber.callback), exc)
+        subscriber.failure = failure
+        subscriber.cancel()
+        self._failures.append(failure)
+        logger.error("%s", failure, exc_info=exc)
+
     def _remove(self, subscription: Subscription) -> None:
         subscribers = self._subscriptions.get(subscription.topic, [])
         if subscription in subscribers:
             subscribers.remove(subscription)
+
+
+def _callback_name(callback: Callable[..., Any]) -> str:
+    name = getattr(callback, "__qualname__", None) or getattr(callback, "__name__", None)
+    if name is None:  # functools.partial, callable objects
+        inner = getattr(callback, "func", None)
+        return _callback_name(inner) if inner is not None else repr(callback)
+    module = getattr(callback, "__module__", None)
+    return f"{module}.{name}" if module else str(name)
 
 
 def _check_name(topic: str) -> None:

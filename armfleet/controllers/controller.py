@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
@@ -74,6 +74,8 @@ class Controller(ABC):
         self._state = LifecycleState.UNCONFIGURED
         self.parameters: dict[str, float | bool] = {}
         self.period_steps = 1
+        #: Where :meth:`fail` reports to (set by the controller manager that loads it).
+        self.on_failure: Callable[[Controller, Exception], None] | None = None
 
     @property
     def name(self) -> str:
@@ -111,6 +113,17 @@ class Controller(ABC):
         self._require(LifecycleState.ACTIVE, "deactivate")
         self.on_deactivate()
         self._state = LifecycleState.INACTIVE
+
+    def fail(self, exc: Exception) -> None:
+        """Report that this controller broke outside its update (e.g. in its own command
+        subscription): its manager puts the arm in ``error``, as for a failed update.
+
+        Raises:
+            Exception: ``exc`` itself, if no manager has loaded this controller.
+        """
+        if self.on_failure is None:
+            raise exc
+        self.on_failure(self, exc)
 
     @property
     def period(self) -> float:

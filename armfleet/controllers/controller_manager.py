@@ -49,6 +49,7 @@ class ControllerManager:
         if controller.name in self._controllers:
             raise ArmfleetError(f"{self._arm.name}: controller {controller.name} already loaded")
         self._controllers[controller.name] = controller
+        controller.on_failure = self.fail_controller
         return controller
 
     def activate(self, name: str) -> None:
@@ -90,7 +91,8 @@ class ControllerManager:
         self.check_efforts()
 
     def fail_controller(self, controller: Controller, exc: Exception) -> None:
-        """Put the arm in ``error`` because ``controller`` raised ``exc`` in its update."""
+        """Put the arm in ``error`` because ``controller`` raised ``exc`` (in its update, or
+        in its own command subscription)."""
         self._fail(f"{controller.name} raised {type(exc).__name__}: {exc}", controller)
 
     def check_efforts(self) -> None:

@@ -140,7 +140,8 @@ class GripperController(Controller):
         commands = self.arm.topic("gripper_controller/commands")
         self.arm.bus.advertise(commands, GripperCommand)
         self.arm.bus.advertise(self._state_topic, GripperState)
-        self._subscription = self.arm.bus.subscribe(commands, self._on_command)
+        # on_error: a command this controller failed to take faults its arm, not skipped.
+        self._subscription = self.arm.bus.subscribe(commands, self._on_command, on_error=self.fail)
 
     def on_cleanup(self) -> None:
         self._subscription.cancel()

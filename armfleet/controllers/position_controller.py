@@ -106,8 +106,9 @@ class PositionController(Controller):
         self._state_topic = self.arm.topic("position_controller/state")
         self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
         self.arm.bus.advertise(self._state_topic, ControllerState)
+        # on_error: a command this controller failed to take faults its arm, not skipped.
         self._subscription = self.arm.bus.subscribe(
-            self.arm.topic("position_controller/commands"), self._on_command
+            self.arm.topic("position_controller/commands"), self._on_command, on_error=self.fail
         )
 
     def on_cleanup(self) -> None:
