@@ -152,6 +152,24 @@ class ObjectError(ArmfleetError):
 
     def __init__(self, name: object, field: str, problem: str) -> None:
         self.name, self.field, self.problem = name, field, problem
+class InvalidNumber(ArmfleetError):
+    """An argument that must be a finite real number (or numbers), not text, bool,
+    complex or None, and within its range.
+
+    Attributes:
+        argument: its name (``"dt"``, ``"bob: gripper width"``).
+        value: what was given.
+        valid: what would be right, with its unit.
+    """
+
+    def __init__(self, argument: str, value: object, valid: str) -> None:
+        self.argument, self.value, self.valid = argument, value, valid
+        shown = " ".join(repr(value).split())  # one line, even for an array
+        if len(shown) > 60:
+            shown = shown[:57] + "..."
+        super().__init__(f"{argument} = {shown} is invalid; give {valid}")
+
+
         super().__init__(f"object {name!r}: {field}: {problem}")
 
 
