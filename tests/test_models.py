@@ -257,12 +257,12 @@ def test_viewer_draws_every_visual(viewed: tuple[armfleet.World, SceneState], mo
         assert np.abs(scene.transforms[node] - expected[node]).max() < VIEWER_POSE_TOLERANCE
 
 
-# -- the README's table ---------------------------------------------------------------------
+# -- the docs' table of models (docs/descriptions-and-specs.md) ----------------------------
 
 
-def test_readme_table_lists_every_model_and_its_home() -> None:
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    rows = re.findall(r"^\| (\w+) \| `[^`]+` \| [^|]+ \| ([^|]+) \|", readme, flags=re.MULTILINE)
+def test_docs_table_lists_every_model_and_its_home() -> None:
+    page = Path(__file__).resolve().parents[1] / "docs" / "descriptions-and-specs.md"
+    rows = re.findall(r"^\| (\w+) \| `[^`]+` \| [^|]+ \| ([^|]+) \|", page.read_text(), re.M)
     assert sorted(model for model, _ in rows) == MODEL_NAMES
     library = ModelLibrary()
     for model, home in rows:

@@ -1,19 +1,86 @@
-"""The README's Python example runs as written, and its two set-up commands are the real ones."""
+"""The README is the short path and the docs/ pages hold the rest; both stay true.
+
+The README's two set-up commands are the real ones, its Python example runs, its CLI summary
+names every subcommand and only real options, the spawn output it shows has the shape of a
+real run's, and every relative link in the README and docs/ reaches a file (and heading).
+Each docs page's ``python`` blocks run in order as one program.
+"""
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+#: The topic pages issue #14 asks for, besides the index docs/README.md.
+PAGES = (
+    "live-api.md",
+    "manipulation.md",
+    "recording.md",
+    "safety.md",
+    "performance.md",
+    "descriptions-and-specs.md",
+    "design.md",
+)
+#: Pages whose ``python`` blocks need more than this file gives them, and who runs them.
+RUN_ELSEWHERE = {
+    # Its client example needs a world running in another process.
+    "live-api.md": "tests/test_remote_session.py::test_the_live_api_example_runs_as_written",
+}
+#: Longest README: the short path fits a couple of screens (it was 610 lines).
+MAX_README_LINES = 150
+ARMFLEET = (sys.executable, "-m", "armfleet.cli.main")
 
 
-def code_blocks(language: str) -> list[str]:
-    return re.findall(rf"```{language}\n(.*?)```", README.read_text(), flags=re.DOTALL)
+def code_blocks(path: Path, language: str) -> list[str]:
+    return re.findall(rf"^```{language}\n(.*?)^```", path.read_text(), re.DOTALL | re.MULTILINE)
+
+
+def section(path: Path, heading: str) -> str:
+    """The text under ``## heading`` up to the next ``## ``."""
+    text = path.read_text()
+    start = text.index(f"\n## {heading}\n")
+    end = text.find("\n## ", start + 1)
+    return text[start : end if end >= 0 else len(text)]
+
+
+def armfleet_help(*args: str) -> str:
+    done = subprocess.run([*ARMFLEET, *args, "--help"], capture_output=True, text=True, check=True)
+    return done.stdout
+
+
+def subcommands() -> list[str]:
+    found = re.search(r"^usage: armfleet .*?\{([a-z,-]+)\}", armfleet_help(), re.M | re.S)
+    assert found is not None, "armfleet --help lists no subcommands"
+    return found.group(1).split(",")
+
+
+def markdown_files() -> list[Path]:
+    return [README, *sorted(DOCS.glob("*.md"))]
+
+
+def test_readme_is_the_short_path() -> None:
+    lines = README.read_text().splitlines()
+    assert len(lines) <= MAX_README_LINES
+    headings = [line for line in lines if line.startswith("## ")]
+    assert headings == ["## Set up", "## Python", "## Command line", "## Documentation"]
+    index = (DOCS / "README.md").read_text()
+    for page in PAGES:
+        assert (DOCS / page).is_file(), page
+        assert f"(docs/{page})" in README.read_text(), f"the README does not link docs/{page}"
+        assert f"({page})" in index, f"docs/README.md does not link {page}"
 
 
 def test_python_example_runs() -> None:
-    (example,) = code_blocks("python")
+    (example,) = code_blocks(README, "python")
+    assert len(example.splitlines()) <= 20
     namespace: dict[str, object] = {}
     exec(compile(example, str(README), "exec"), namespace)
     world = namespace["world"]
@@ -21,8 +88,112 @@ def test_python_example_runs() -> None:
 
 
 def test_exactly_two_setup_commands_and_ci_runs_the_test_one() -> None:
-    commands = [block.strip() for block in code_blocks("bash")]
-    assert len(commands) == 2
+    shell = re.findall(r"^```(?:bash|sh|shell|console)\n", README.read_text(), re.MULTILINE)
+    commands = [block.strip() for block in code_blocks(README, "bash")]
+    assert len(shell) == len(commands) == 2
     assert "armfleet spawn bob toby --at 0,0 1,0" in commands[0]
-    ci = (README.parent / ".ci" / "run").read_text()
+    ci = (ROOT / ".ci" / "run").read_text()
     assert commands[1] in ci
+    setup = section(README, "Set up")
+    assert "source .venv/bin/activate" in setup  # how armfleet gets on PATH
+    assert re.search(r"took\s+\d+ s", setup), "the install time is stated"
+
+
+def test_readme_says_a_spawn_joins_the_running_world_and_how_not_to() -> None:
+    setup = " ".join(section(README, "Set up").split())
+    assert "*joins it*" in setup
+    assert "`armfleet spawn ... --new-world` starts a separate one" in setup
+    assert "--new-world" in armfleet_help("spawn")
+
+
+def test_cli_summary_names_every_subcommand_and_only_real_options() -> None:
+    summary = code_blocks(README, "text")[1]
+    assert summary.lstrip().startswith("armfleet spawn")
+    words = set(re.findall(r"[a-z][a-z-]*", summary))
+    existing = subcommands()
+    missing = [name for name in existing if name not in words]
+    assert not missing, f"subcommands missing from the README's CLI summary: {missing}"
+    named = set(re.findall(r"armfleet ([a-z-]+)", summary))
+    named |= set(re.findall(r"\| ([a-z][a-z-]*)", summary))
+    assert named <= set(existing) | {"list", "echo"}, named - set(existing)
+    helps = " ".join(armfleet_help(name) for name in existing)
+    helps += armfleet_help("topic", "echo")
+    options = set(re.findall(r"--[a-z][a-z-]*", summary))
+    unknown = sorted(option for option in options if option not in helps)
+    assert not unknown, f"options in the README's CLI summary that no command takes: {unknown}"
+
+
+def test_the_spawn_output_shown_is_what_a_spawn_prints(tmp_path: Path) -> None:
+    shown = code_blocks(README, "text")[0].splitlines()
+    env = os.environ | {"XDG_RUNTIME_DIR": str(tmp_path), "PYTHONUNBUFFERED": "1"}
+    # --duration 2.5: long enough for a status line (once a second), short for a test.
+    done = subprocess.run(
+        [*ARMFLEET, "spawn", "bob", "toby", "--at", "0,0", "1,0", "--duration", "2.5"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        check=True,
+    )
+    printed = done.stdout.splitlines()
+    assert shown[0].startswith("viewer: http://127.0.0.1:") and shown[0].endswith("/static/")
+    assert re.fullmatch(r"viewer: http://127\.0\.0\.1:\d+/static/", printed[0]), printed
+    for line in shown[1:]:
+        if line == "...":
+            continue
+        # Numbers differ from run to run, and the status line is shortened with "...".
+        prefix = re.sub(r"\d+(\.\d+)?", "#", line.split("...")[0])
+        assert any(re.sub(r"\d+(\.\d+)?", "#", out).startswith(prefix) for out in printed), (
+            line,
+            printed,
+        )
+
+
+LINK = re.compile(r"\]\(([^)\s]+)\)")
+
+
+def heading_anchor(heading: str) -> str:
+    """GitHub's anchor for a heading: lower case, punctuation dropped, spaces to dashes."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+@pytest.mark.parametrize(
+    "path", markdown_files(), ids=lambda path: path.relative_to(ROOT).as_posix()
+)
+def test_every_relative_link_reaches_a_file_and_heading(path: Path) -> None:
+    links = [link for link in LINK.findall(path.read_text()) if "://" not in link]
+    for link in links:
+        target, _, anchor = link.partition("#")
+        resolved = (path.parent / target).resolve() if target else path
+        assert resolved.exists(), f"{path.name}: {link} -> {resolved} does not exist"
+        if anchor:
+            headings = re.findall(r"^#+ (.+)$", resolved.read_text(), re.MULTILINE)
+            anchors = {heading_anchor(heading) for heading in headings}
+            assert anchor in anchors, f"{path.name}: {link}: no such heading in {target}"
+
+
+def pages_with_examples() -> list[str]:
+    return [
+        page
+        for page in PAGES
+        if (DOCS / page).is_file() and "```python" in (DOCS / page).read_text()
+    ]
+
+
+def test_the_docs_have_examples_and_none_is_left_unrun() -> None:
+    assert "manipulation.md" in pages_with_examples()
+    for page in pages_with_examples():
+        text = (DOCS / page).read_text()
+        # Fragments would be fenced some other way and never run: only python blocks exist.
+        assert not re.search(r"^```(py|python3)\n", text, re.MULTILINE), page
+
+
+@pytest.mark.parametrize("page", [p for p in pages_with_examples() if p not in RUN_ELSEWHERE])
+def test_docs_python_examples_run_in_order(page: str) -> None:
+    blocks = code_blocks(DOCS / page, "python")
+    namespace: dict[str, object] = {}
+    for block in blocks:
+        exec(compile(block, str(DOCS / page), "exec"), namespace)
+    world = namespace["world"]
+    assert getattr(world, "closed", False), f"docs/{page}'s examples end with world.close()"

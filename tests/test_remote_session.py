@@ -144,11 +144,11 @@ def test_a_stopping_world_ends_subscriptions_and_requests_fail_fast(world: World
             client.info()
 
 
-def test_the_readme_live_api_example_runs_as_written(world: WorldProcess) -> None:
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    blocks = re.findall(r"```py\n(.*?)```", readme, flags=re.DOTALL)
+def test_the_live_api_example_runs_as_written(world: WorldProcess) -> None:
+    page = (Path(__file__).resolve().parents[1] / "docs" / "live-api.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", page, flags=re.DOTALL)
     (example,) = [block for block in blocks if "armfleet.connect()" in block]
-    exec(compile(example, "README.md", "exec"), {})
+    exec(compile(example, "docs/live-api.md", "exec"), {})
     with armfleet.connect() as client:
         assert client.info().arms == ("bob", "carol")
         assert client.info().streams == 0  # the example cleaned up after itself
