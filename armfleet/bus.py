@@ -21,6 +21,7 @@ subscribers are told through ``on_gone``.
 
 from __future__ import annotations
 
+import functools
 import logging
 import re
 from collections import defaultdict
@@ -34,7 +35,7 @@ logger = logging.getLogger("armfleet")
 
 Callback = Callable[[Any], None]
 ErrorHandler = Callable[[Exception], None]
-GoneHandler = Callable[[str], None]
+GoneHandler = Callable[[str, str], None]
 TOPIC_PATTERN = re.compile(r"^(/[a-z][a-z0-9_]*)+$")
 
 
@@ -128,13 +129,18 @@ class Bus:
         if known is not message_type:
             raise TopicError(f"topic {topic} carries {known.__name__}, not {message_type.__name__}")
 
-    def unadvertise(self, namespace: str) -> list[str]:
+    def unadvertise(self, namespace: str, reason: str) -> list[str]:
         """Withdraw every topic under ``namespace`` (``/ned``: ``/ned/joint_states`` ...).
 
         Their types and latched messages are forgotten, so they leave
-        :attr:`topics`; each of their subscribers is told through its ``on_gone``
-        (and stays subscribed: a topic advertised again under the same name, e.g.
-        by a new arm of the same name, reaches it again).
+        :attr:`topics`; each subscriber of a topic under ``namespace`` (advertised
+        yet or not) is told through its ``on_gone(topic, reason)`` and stays
+        subscribed: a topic advertised again under the same name (a new arm of the
+        same name) reaches it again.
+
+        Args:
+            namespace: ``/segment[/segment...]``.
+            reason: why, for the subscribers (``"arm ned was removed"``).
 
         Returns:
             The withdrawn topics.
@@ -145,10 +151,11 @@ class Bus:
         for topic in gone:
             del self._types[topic]
             self._latched.pop(topic, None)
-        for topic in gone:
+        listened = [t for t, s in self._subscriptions.items() if s and t.startswith(prefix)]
+        for topic in listened:
             for subscription in tuple(self._subscriptions.get(topic, ())):
                 if subscription.on_gone is not None:
-                    self._call(subscription, subscription.on_gone, topic)
+                    self._call(subscription, functools.partial(subscription.on_gone, topic), reason)
         return gone
 
     @property
@@ -178,7 +185,7 @@ class Bus:
                 subscriber that must handle its own failures (a controller's command
                 subscription). Without it a raising callback is logged, counted in
                 :attr:`failures` and dropped; the publisher never sees the exception.
-            on_gone: called with the topic when it is withdrawn (:meth:`unadvertise`).
+            on_gone: called with the topic and why when it is withdrawn (:meth:`unadvertise`).
         """
         _check_name(topic)
         subscription = Subscription(topic, callback, self, on_error, on_gone)

@@ -289,6 +289,7 @@ class World:
         arm.body.remove()
         del self._arms[arm.name]
         self._controllers.lay_out(self._arms.values())
+        self._bus.unadvertise(arm.namespace, f"arm {arm.name} was removed")  # subscribers told
 
     # -- objects ----------------------------------------------------------------------
     @property

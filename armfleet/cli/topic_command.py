@@ -1,4 +1,9 @@
-"""``armfleet topic list`` and ``armfleet topic echo TOPIC [--once] [--rate HZ]``."""
+"""``armfleet topic list`` and ``armfleet topic echo TOPIC [--once] [--rate HZ] [--timeout S]``.
+
+``echo --timeout S`` bounds the whole command: it ends within about S seconds
+whatever the world does (silent topic, topic removed, world gone or hung).
+Without it, ``echo`` runs until Ctrl-C, its topic goes away, or the world does.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +12,7 @@ import contextlib
 import math
 import queue
 import sys
+import time
 from typing import Any
 
 import yaml
@@ -14,7 +20,9 @@ import yaml
 from armfleet.cli.api_options import add_connect_arguments, connect_from
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.remote import ConnectionLost
+from armfleet.remote.client import DEFAULT_TIMEOUT_S
 from armfleet.remote.codec import to_wire
+from armfleet.remote.errors import RequestTimeout
 
 #: Messages ``echo`` holds for the terminal before dropping the oldest.
 ECHO_QUEUE = 100
@@ -39,7 +47,14 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help="print at most HZ messages per second (default: as many as the terminal takes)",
     )  # fmt: skip
     add_connect_arguments(echo)
-    echo.set_defaults(run=echo_topic)
+    for action in echo._actions:
+        if action.dest == "timeout":
+            action.help = (
+                "end within about S seconds whatever happens (with --once: an error if no "
+                "message came); default: run until Ctrl-C, and wait "
+                f"{DEFAULT_TIMEOUT_S:g} s for each answer of the world"
+            )
+    echo.set_defaults(run=echo_topic, timeout=None)  # None: --timeout not given
     actions.metavar = "{" + ",".join(actions.choices) + "}"  # named in a missing-action error
     parser.commands = tuple(actions.choices)
 
@@ -67,11 +82,26 @@ def echo_topic(args: argparse.Namespace) -> int:
                 with contextlib.suppress(queue.Empty):
                     received.get_nowait()
 
-    with connect_from(args) as client:
+    limit: float | None = args.timeout
+    started = time.monotonic()
+    # Each answer of the world waits at most the time left, so that connecting and
+    # subscribing fit in the limit too (the subscription asks twice: stream, subscribe).
+    request_timeout = DEFAULT_TIMEOUT_S if limit is None else limit
+    with connect_from(argparse.Namespace(**vars(args) | {"timeout": request_timeout})) as client:
+        if limit is not None:
+            client.timeout = max(1e-3, 0.5 * (limit - (time.monotonic() - started)))
         subscription = client.subscribe(args.topic, keep, rate_hz=rate)
-        while True:  # until --once, Ctrl-C, or a closed pipe (armfleet ... | head)
+        while True:  # until --once, --timeout, Ctrl-C, or a closed pipe (armfleet ... | head)
+            wait = 0.25
+            if limit is not None:
+                left = limit - (time.monotonic() - started)
+                if left <= 0:
+                    if args.once:
+                        raise RequestTimeout(f"no message on {args.topic} within {limit:g} s")
+                    return 0
+                wait = min(wait, left)
             try:
-                message = received.get(timeout=0.25)
+                message = received.get(timeout=wait)
             except queue.Empty:
                 if not subscription.active:
                     raise subscription.error or ConnectionLost("the world went away") from None

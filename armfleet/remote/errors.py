@@ -63,3 +63,15 @@ class RequestTimeout(ArmfleetError):
 
 class ConnectionLost(ArmfleetError):
     """The world went away (it closed, or stopped answering)."""
+
+
+class TopicGone(ArmfleetError):
+    """A subscribed topic went away (e.g. its arm was removed): no more messages come.
+
+    Attributes:
+        topic: the topic.
+    """
+
+    def __init__(self, topic: str, reason: str) -> None:
+        self.topic = topic
+        super().__init__(reason if topic in reason else f"topic {topic} is gone: {reason}")

@@ -9,6 +9,7 @@ sockets: one for requests (one frame each, one reply each), one for streams
   or ``{"kind": "reply", "id": ..., "ok": false, "error": {"type": str, "message": str}}``
 - stream:   ``{"kind": "messages", "items": [[sub, dropped, type, message], ...]}``,
   ``{"kind": "tick"}`` (every second, so both ends notice the other going away),
+  ``{"kind": "ended", "sub": int, "reason": str}`` (the topic went away: no more messages),
   ``{"kind": "closing", "reason": str}``.
 
 Numbers are msgpack floats/ints, vectors are lists of floats: never pickle, never eval.
@@ -80,6 +81,7 @@ class FrameKind(enum.Enum):
     REPLY = "reply"
     MESSAGES = "messages"
     TICK = "tick"
+    ENDED = "ended"
     CLOSING = "closing"
 
 

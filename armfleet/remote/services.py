@@ -256,7 +256,7 @@ class WorldServices:
             kind = bus.topics.get(topic)
             if kind is None:
                 raise UnknownTopic(topic, list(bus.topics))
-            return bus.subscribe(topic, queue.push), kind.__name__
+            return bus.subscribe(topic, queue.push, on_gone=queue.topic_gone), kind.__name__
 
         return subscribe
 

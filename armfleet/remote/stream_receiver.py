@@ -18,7 +18,7 @@ from typing import Any
 import zmq
 
 from armfleet.remote.codec import decode_message, pack, unpack
-from armfleet.remote.errors import ConnectionLost, NoWorldFound
+from armfleet.remote.errors import ConnectionLost, NoWorldFound, TopicGone
 from armfleet.remote.protocol import STREAM_SILENCE_S, FrameKind
 
 logger = logging.getLogger("armfleet")
@@ -149,6 +149,11 @@ class StreamReceiver:
                 self._attached.set()
             else:
                 self._lose(ConnectionLost(f"the world refused a stream: {frame.get('error')}"))
+        elif kind == FrameKind.ENDED.value:
+            with self._lock:
+                subscription = self._subscriptions.get(frame.get("sub"))
+            if subscription is not None:  # its queued messages are still delivered
+                subscription.end(TopicGone(subscription.topic, str(frame.get("reason", ""))))
         elif kind == FrameKind.CLOSING.value:
             self._lose(ConnectionLost(f"the world at {self._address} closed"))
 

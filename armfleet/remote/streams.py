@@ -207,9 +207,24 @@ class StreamHub:
             while not stream.closed:
                 items = stream.take_batch(MAX_BATCH)
                 if not items:
+                    self._end_gone(stream)
                     break
                 if not self._send(stream, pack({"kind": FrameKind.MESSAGES.value, "items": items})):
                     break
+
+    def _end_gone(self, stream: Stream) -> None:
+        """Tell ``stream`` which of its topics went away (once their last messages are
+        sent), and drop those subscriptions."""
+        for key, subscription in tuple(stream.subscriptions.items()):
+            reason = subscription.queue.gone
+            if reason is None or len(subscription.queue):
+                continue
+            if stream.closed or stream.held is not None:
+                return  # the rest next time (a busy stream holds one frame at a time)
+            del stream.subscriptions[key]
+            self._cancel(subscription)
+            # Sent, or held and sent before anything else.
+            self._send(stream, pack({"kind": FrameKind.ENDED.value, "sub": key, "reason": reason}))
 
     def tick(self) -> None:
         """Tell every stream the world is alive (and find the clients that are gone)."""

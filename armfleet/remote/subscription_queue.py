@@ -36,6 +36,7 @@ class SubscriptionQueue:
         self._dropped = 0
         self._accepted = 0
         self._closed = False
+        self._gone: str | None = None
 
     @property
     def dropped(self) -> int:
@@ -63,6 +64,15 @@ class SubscriptionQueue:
         self._accepted += 1
         if self._on_push is not None:
             self._on_push()
+
+    def topic_gone(self, topic: str, reason: str) -> None:
+        """The topic was withdrawn (a bus ``on_gone`` callback, in the stepping thread)."""
+        self._gone = f"topic {topic} is gone: {reason}"
+
+    @property
+    def gone(self) -> str | None:
+        """Why the topic went away, or None while it exists."""
+        return self._gone
 
     def pop(self) -> Any | None:
         """The oldest queued message, or None."""
