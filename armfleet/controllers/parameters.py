@@ -15,10 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from armfleet.errors import ParameterError
-from armfleet.located_yaml import LocatedDict, load_located
+from armfleet.located_yaml import LocatedDict, YamlDocumentError, read_located
 from armfleet.paths import data_dir
 
 
@@ -87,11 +85,9 @@ def _parsed(path: Path, mtime_ns: int, size: int) -> Any:
     fleet reads the same few files; the result is only read, never changed)."""
     del mtime_ns, size  # part of the cache key only
     try:
-        return load_located(path.read_text())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-        raise ParameterError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+        return read_located(path)
+    except YamlDocumentError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 def _check(

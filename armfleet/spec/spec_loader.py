@@ -30,19 +30,20 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import yaml
-
 from armfleet.controllers.parameters import check_parameter
 from armfleet.controllers.registry import CONTROLLER_TYPES
+from armfleet.description import ModelLibrary
 from armfleet.errors import ParameterError
-from armfleet.located_yaml import LocatedDict, load_located
+from armfleet.located_yaml import LocatedDict, YamlDocumentError, load_located, read_located
 from armfleet.paths import data_dir
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
 from armfleet.spec.object_entries import read_objects
+from armfleet.spec.scene_rehearsal import SceneRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
+from armfleet.time_step import MAX_DT_S, MIN_DT_S
 
 TOP_KEYS = ("world", "arms", "grid", "objects")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
@@ -71,19 +72,29 @@ def find_spec(name_or_path: str) -> Path:
 def load_spec(name_or_path: str | Path) -> FleetSpec:
     """Read and check a launch spec; raise :class:`SpecError` at the first problem."""
     path = find_spec(str(name_or_path))
-    return parse_spec(path.read_text(), str(path), base_dir=path.parent)
+    try:
+        document = read_located(path)
+    except YamlDocumentError as exc:
+        raise SpecError(exc.source, exc.line, "", exc.problem) from None
+    return _spec_from(document, str(path), path.parent)
 
 
 def parse_spec(text: str, source: str, base_dir: Path | None = None) -> FleetSpec:
-    """Check ``text`` (YAML) as a launch spec from ``source``."""
-    reader = SpecReader(source)
+    """Check ``text`` (YAML) as a launch spec from ``source``.
+
+    Raises:
+        SpecError: at the first problem, with its line (see :mod:`armfleet.located_yaml`
+            for the bounds on size, nesting and aliases).
+    """
     try:
-        document = load_located(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else 0
-        problem = str(getattr(exc, "problem", None) or exc).strip()
-        raise reader.error(line, "", f"not valid YAML: {problem}") from None
+        document = load_located(text, source)
+    except YamlDocumentError as exc:
+        raise SpecError(exc.source, exc.line, "", exc.problem) from None
+    return _spec_from(document, source, base_dir)
+
+
+def _spec_from(document: object, source: str, base_dir: Path | None) -> FleetSpec:
+    reader = SpecReader(source)
     if document is None:
         document = LocatedDict()
         document.line, document.key_lines = 1, {}
@@ -100,9 +111,14 @@ def parse_spec(text: str, source: str, base_dir: Path | None = None) -> FleetSpe
     if "grid" in top:
         grid = reader.mapping(top["grid"], "grid", top.line_of("grid"))
         arms.extend(_grid(reader, grid, base_dir))
-    check_fleet(reader, arms)
+    models = ModelLibrary()
+    check_fleet(reader, arms, models)
     names = {arm.name for arm, _, _ in arms}
-    objects = read_objects(reader, top, base_dir, names, _orientation)
+    with SceneRehearsal(reader, models) as scene:  # frame owners, start clearance
+        for arm, entry, field in arms:
+            scene.add_arm(arm, entry, field)
+        objects = read_objects(reader, top, base_dir, names, _orientation, scene.add_object)
+        scene.place_arms()
     return FleetSpec(world, tuple(arm for arm, _, _ in arms), source, objects)
 
 
@@ -113,7 +129,7 @@ def _world(reader: SpecReader, top: LocatedDict) -> WorldSpec:
     reader.only_keys(world, "world", WORLD_KEYS)
     defaults = WorldSpec()
     return WorldSpec(
-        dt_s=reader.number(world, "dt_s", "world", defaults.dt_s, 1e-5, 0.1, "s"),
+        dt_s=reader.number(world, "dt_s", "world", defaults.dt_s, MIN_DT_S, MAX_DT_S, "s"),
         gravity_m_s2=reader.number(
             world, "gravity_m_s2", "world", defaults.gravity_m_s2, -100.0, 100.0, "m/s^2"
         ),
