@@ -1,8 +1,12 @@
 """Trajectory tracking: bob follows jerk-limited motions; toby, commanded nothing, stays put.
 
-Tolerances (issue #2): max |q_ref - q| during motion < 1e-3 rad; final error
-< 1e-4 rad 0.2 s after the reference ends; measured joint velocities never
-above the URDF limits; toby's joints move < 1e-5 rad.
+Tolerances: max |q_ref - q| during motion < 1e-5 rad (issue #2 asked 1e-3; measured
+3.2e-6 on the Panda, most of it the settling of its brake release just before the
+move, and 3.3e-7 on the UR5, since the controller accounts for PyBullet's integrator
+and Bullet's link damping is off, issue #14); final error < 1e-7 rad 0.2 s after the
+reference ends (measured 7e-10); measured joint velocities never above the URDF
+limits; toby's joints move < 1e-5 rad. And on the benchmark's move armfleet tracks
+at least as well as PyBullet's own POSITION_CONTROL given Ruckig's velocities.
 
 Each motion is recorded (MCAP); a failing test leaves the recording and its
 tracking plots in ``test-artifacts/<test id>/`` (see ``keep_on_failure``).
@@ -15,13 +19,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pybullet as p
 import pytest
 
 import armfleet
+from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
 from armfleet.messages import ControllerState, JointState
 
-MAX_TRACKING_ERROR_RAD = 1e-3
-FINAL_ERROR_RAD = 1e-4
+MAX_TRACKING_ERROR_RAD = 1e-5
+FINAL_ERROR_RAD = 1e-7
 SETTLE_S = 0.2
 BYSTANDER_MOTION_RAD = 1e-5
 #: What a failing test's recording holds: enough to plot and replay the motion.
@@ -207,3 +213,65 @@ def test_a_joint_a_hair_past_its_limit_can_move_back(world: armfleet.World) -> N
     further[2] += 0.3
     further[1] = upper
     controller.plan(further)  # joint 2 goes back to its limit, joint 3 elsewhere: fine
+
+
+#: The move of benchmarks/fleet.py's tracking comparison, from the Panda's home [rad].
+BENCHMARK_MOVE_RAD = np.array([0.8, 0.6, -0.7, 0.8, 0.9, -0.8, 0.9])
+
+
+def test_tracks_at_least_as_well_as_position_control_with_velocity_feed_forward() -> None:
+    """The peer a user would pick: PyBullet's POSITION_CONTROL motors given Ruckig's positions
+    and velocities each step, with the URDF effort limits. On the same move armfleet's
+    torques (never clipped) track at least as well.
+
+    Each is measured where it does best: armfleet's reference for t against the state at
+    t; the motors' target for t against the state after the step, compared with the
+    reference for t + dt (as benchmarks/fleet.py does).
+    """
+    with armfleet.World() as world:
+        arm = world.spawn("bob")
+        start = arm.positions
+        errors: list[float] = []
+        world.bus.subscribe(
+            "/bob/position_controller/state",
+            lambda s: errors.append(float(np.abs(s.reference_position - s.position).max())),
+        )
+        arm.move_to(start + BENCHMARK_MOVE_RAD)
+        run_until_still(world, arm)
+        controller = arm.position_controller
+        assert controller.saturation_steps.sum() == 0, "physical torques, within the limits"
+        ours = max(errors)
+        reference = JerkLimitedTrajectory(
+            start,
+            world.dt,
+            controller.max_velocity,
+            np.full(start.size, float(controller.parameters["max_acceleration_rad_s2"])),
+            np.full(start.size, float(controller.parameters["max_jerk_rad_s3"])),
+        )
+    with armfleet.World() as world:
+        arm = world.spawn("bob")
+        assert np.array_equal(arm.positions, start)
+        arm.controller_manager.shutdown()  # brakes on; the arm joints' motors take over
+        client, body = world.physics_client, arm.body.body_id
+        chain = arm.kinematics.arm_indices
+        joints = [arm.body.joint_indices[i] for i in chain]
+        effort = arm.kinematics.effort_limit[chain].tolist()
+        reference.follow(reference.plan(start + BENCHMARK_MOVE_RAD))
+        theirs = 0.0
+        while reference.moving:
+            p.setJointMotorControlArray(
+                body, joints, p.POSITION_CONTROL, targetPositions=reference.position.tolist(),
+                targetVelocities=reference.velocity.tolist(), forces=effort,
+                physicsClientId=client,
+            )  # fmt: skip
+            p.stepSimulation(physicsClientId=client)
+            reference.advance()
+            measured = np.array(
+                [s[0] for s in p.getJointStates(body, joints, physicsClientId=client)]
+            )
+            theirs = max(theirs, float(np.abs(reference.position - measured).max()))
+    print(
+        f"max tracking error: armfleet {ours:.2e} rad, POSITION_CONTROL + velocity {theirs:.2e} rad"
+    )
+    assert theirs > 1e-6, "the peer was measured"
+    assert ours <= theirs

@@ -7,8 +7,9 @@ rate, takes the fleet path:
 1. broadcasters: one copy of the state rows of the joint memory; each arm's
    message holds views of its own columns of that copy;
 2. position controllers: the feedback of every joint in one numpy pass over
-   the joint memory, RNEA per arm, then damping, clipping and the saturation
-   count in one pass; then each arm's state message and Ruckig step;
+   the joint memory (one world, one physics step: one half-step lead for all),
+   RNEA per arm, then damping, clipping and the saturation count in one pass;
+   then each arm's state message and Ruckig step;
 3. grippers, arm by arm;
 4. one finiteness check of every effort.
 
@@ -71,6 +72,8 @@ class _Plan:
     #: Per column of the memory: whether its arm is on the fleet path.
     mask: npt.NDArray[np.bool_]
     everyone: bool
+    #: The controllers' half physics step [s] (one world, one step; 0 with no fleet).
+    half_step_s: float
 
 
 class FleetUpdate:
@@ -123,7 +126,8 @@ class FleetUpdate:
             else:
                 fleet.append(entry)
                 mask[entry.columns] = True
-        return _Plan(key, tuple(fleet), tuple(others), mask, bool(mask.all()))
+        half_step_s = fleet[0].controller.half_step_s if fleet else 0.0
+        return _Plan(key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s)
 
     def _update_fleet(self, plan: _Plan, stamp: float) -> None:
         memory = self._memory
@@ -148,7 +152,7 @@ class FleetUpdate:
         feedback_acceleration(
             q, v, rows[Row.REFERENCE_POSITION], rows[Row.REFERENCE_VELOCITY],
             rows[Row.REFERENCE_ACCELERATION], rows[Row.KP], rows[Row.KD],
-            out=acceleration, scratch=rows[Row.SCRATCH],
+            half_step_s=plan.half_step_s, out=acceleration, scratch=rows[Row.SCRATCH],
         )  # fmt: skip
         torqued: list[_FleetArm] = []
         for arm in alive:

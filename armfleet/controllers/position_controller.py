@@ -3,10 +3,23 @@
 Each update pairs the Ruckig reference for time t with the state measured at
 t, and computes
 
-    tau = RNEA(q, v, qdd_ref + kp (q_ref - q) + kd (v_ref - v)) + damping * v
+    tau = RNEA(q, v, qdd_ref + kp (q_ref - q) + kd (v_ref - (h/2) qdd_ref - v)) + damping * v
 
-clipped to the URDF effort limits. Joints off the base_link -> tool0 chain
-(fingers) are held where they were when the controller was activated.
+clipped to the URDF effort limits, where h is the physics step. Joints off the
+base_link -> tool0 chain (fingers) are held where they were when the controller
+was activated.
+
+The (h/2) qdd_ref is the physics engine's integrator, not a tuning term. PyBullet
+steps with semi-implicit Euler, v' = v + h a then q' = q + h v', so a state that
+stays on the reference's positions moves by q_ref(t + h) - q_ref(t) = h v' at each
+step: its velocity at t is the backward difference (q_ref(t) - q_ref(t - h)) / h =
+v_ref - (h/2) qdd_ref + O(h^2), not v_ref. Compared with v_ref, the kd term pulled
+the arm off the reference by kd h qdd_ref / (2 kp) (1.0e-4 rad at 5 rad/s^2 with the
+default gains); compared with the velocity the integrator gives, it does not. The
+same holds when the controller runs slower than the physics (h stays the physics
+step). The feed-forward qdd_ref is already what lands the state on the reference
+one step later: (q_ref(t + h) - 2 q_ref(t) + q_ref(t - h)) / h^2 equals it exactly
+on Ruckig's constant-jerk segments.
 """
 
 from __future__ import annotations
@@ -91,6 +104,9 @@ class PositionController(Controller):
         self._ref_acceleration = np.zeros(size)
         self._kp = np.full(size, float(self.parameters["kp_s2"]))
         self._kd = np.full(size, float(self.parameters["kd_s"]))
+        #: Half the physics step [s]: the velocity the integrator gives a state on the
+        #: reference lags v_ref by this times qdd_ref (see the module docstring).
+        self.half_step_s = 0.5 * self.arm.dt
         self._damping = kinematics.damping.copy()
         self._effort_limit = kinematics.effort_limit.copy()
         self._negative_effort_limit = -self._effort_limit
@@ -352,11 +368,12 @@ class PositionController(Controller):
             self._ref_position[part] = trajectory.position
             self._ref_velocity[part] = trajectory.velocity
             self._ref_acceleration[part] = trajectory.acceleration
-        # qdd = qdd_ref + kp (q_ref - q) + kd (v_ref - v), in place, then the torques
-        # (the same operations as the fleet-wide path, see FleetUpdate).
+        # qdd = qdd_ref + kp (q_ref - q) + kd (v_ref - (h/2) qdd_ref - v), in place, then
+        # the torques (the same operations as the fleet-wide path, see FleetUpdate).
         feedback_acceleration(
             q, v, self._ref_position, self._ref_velocity, self._ref_acceleration,
-            self._kp, self._kd, out=self._acceleration, scratch=self._scratch,
+            self._kp, self._kd, half_step_s=self.half_step_s, out=self._acceleration,
+            scratch=self._scratch,
         )  # fmt: skip
         self._torque[:] = self.arm.kinematics.rnea(q, v, self._acceleration)
         clip_torques(
@@ -403,13 +420,17 @@ def feedback_acceleration(
     kp: FloatArray,
     kd: FloatArray,
     *,
+    half_step_s: float,
     out: FloatArray,
     scratch: FloatArray,
 ) -> None:
-    """``out = (q_ref - q) kp + (v_ref - v) kd + a_ref``, in place (per arm or fleet-wide)."""
+    """``out = (q_ref - q) kp + (v_ref - half_step_s a_ref - v) kd + a_ref``, in place (per
+    arm or fleet-wide); ``half_step_s`` is half the physics step [s]."""
     np.subtract(q_ref, q, out=out)
     out *= kp
-    np.subtract(v_ref, v, out=scratch)
+    np.multiply(a_ref, half_step_s, out=scratch)
+    np.subtract(v_ref, scratch, out=scratch)
+    scratch -= v
     scratch *= kd
     out += scratch
     out += a_ref
