@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from armfleet.arm import Arm
-from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
 from armfleet.collision_filter import filter_collisions
 from armfleet.controllers import (
@@ -27,6 +26,7 @@ from armfleet.messages import FloatArray, Positions
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
+from armfleet.start_clearance import Neighbour, load_clear_body
 
 ControllerOverrides = Mapping[str, Mapping[str, Any]]
 
@@ -97,8 +97,12 @@ def assemble_arm(
     parameters: ControllerOverrides,
     parameter_files: Mapping[str, Path],
     frame_pose: Callable[[str], FloatArray] | None = None,
+    neighbours: Iterable[Neighbour] = (),
 ) -> Arm:
     """Load the body (brakes on, at ``start``) and configure its controllers.
+
+    First of all, the body is refused if at ``start`` it would touch itself or any of
+    the ``neighbours`` (:mod:`armfleet.start_clearance`): :class:`StartPoseCollision`.
 
     ``frame_pose`` gives the world pose (4x4) of any frame the world knows
     (e.g. ``world.tf.world_pose``): Cartesian goals may be given in them.
@@ -106,9 +110,11 @@ def assemble_arm(
     Both parameter sets are validated before the arm is returned; on any error
     the body is removed again and the world is as it was.
     """
-    body = ArmBody(client, description.urdf, kinematics.joint_names)
+    body = load_clear_body(
+        client, name, description.urdf, kinematics.joint_names, start,
+        description.ignored_contacts, neighbours,
+    )  # fmt: skip
     try:
-        body.reset(start)
         filter_collisions(client, body, ground, description.ignored_contacts)
         context = ArmContext(name, body, kinematics, bus, dt)
         manager = ControllerManager(context, on_fault=on_fault)

@@ -20,6 +20,7 @@ from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
 from armfleet.collision_filter import rigid_groups
 from armfleet.messages import CollisionReport, Contact
+from armfleet.start_clearance import Neighbour
 
 COLLISIONS_TOPIC = "/collisions"
 GROUND = "ground"
@@ -45,6 +46,7 @@ class ContactMonitor:
         self, client: int, ground: int, bus: Bus, on_new_contact: Callable[[Contact, bool], None]
     ) -> None:
         self._client = client
+        self._ground = ground
         self._bodies: dict[int, tuple[str, dict[int, str]]] = {ground: (GROUND, {-1: ""})}
         self._bus = bus
         self._on_new_contact = on_new_contact
@@ -81,6 +83,14 @@ class ContactMonitor:
         self._bodies.pop(body_id, None)
         self._static_objects.discard(body_id)
         self._dynamic_objects.pop(body_id, None)
+
+    def neighbours(self) -> tuple[Neighbour, ...]:
+        """Every body watched here (floor, arms, objects), for a new arm's clearance check."""
+        supports = {self._ground, *self._static_objects}  # what a base may stand on
+        return tuple(
+            Neighbour(body_id, name, dict(links), body_id in supports)
+            for body_id, (name, links) in self._bodies.items()
+        )
 
     def is_dynamic_object(self, name: str) -> bool:
         """Whether ``name`` is a scene object with a mass (arms may touch it freely)."""

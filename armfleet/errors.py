@@ -14,6 +14,13 @@ def _choices(values: Iterable[str]) -> str:
     return ", ".join(listed) if listed else "(none)"
 
 
+def shown_name(name: object) -> str:
+    """``repr(name)``, cut short for a name too long to print on one line."""
+    if isinstance(name, str) and len(name) > 40:
+        return f"{name[:24]!r}..."
+    return repr(name)
+
+
 class ArmfleetError(Exception):
     """Root of every error armfleet raises for something a user can fix."""
 
@@ -26,12 +33,16 @@ class UnknownModel(ArmfleetError):
 
 
 class InvalidArmName(ArmfleetError):
-    def __init__(self, name: object, pattern: str) -> None:
-        self.name = name
-        super().__init__(
-            f"arm name {name!r} is malformed; a name must match {pattern} "
-            "(lowercase letter first, then lowercase letters, digits or '_')"
-        )
+    """An arm name that breaks the naming rule of :mod:`armfleet.names`.
+
+    Attributes:
+        name: what was given.
+        problem: what is wrong with it and what is valid.
+    """
+
+    def __init__(self, name: object, problem: str) -> None:
+        self.name, self.problem = name, problem
+        super().__init__(f"arm name {shown_name(name)} {problem}")
 
 
 class DuplicateArmName(ArmfleetError):
@@ -141,17 +152,6 @@ class WorldClosed(ArmfleetError):
         super().__init__("this world is closed; create a new armfleet.World()")
 
 
-class ObjectError(ArmfleetError):
-    """A scene object that cannot be made as asked (shape, size, mass, mesh file, name...).
-
-    Attributes:
-        name: the object's name.
-        field: the offending argument (``"shape"``, ``"size"``, ``"mass"``, ...).
-        problem: what is wrong and what would be right.
-    """
-
-    def __init__(self, name: object, field: str, problem: str) -> None:
-        self.name, self.field, self.problem = name, field, problem
 class InvalidNumber(ArmfleetError):
     """An argument that must be a finite real number (or numbers), not text, bool,
     complex or None, and within its range.
@@ -170,7 +170,18 @@ class InvalidNumber(ArmfleetError):
         super().__init__(f"{argument} = {shown} is invalid; give {valid}")
 
 
-        super().__init__(f"object {name!r}: {field}: {problem}")
+class ObjectError(ArmfleetError):
+    """A scene object that cannot be made as asked (shape, size, mass, mesh file, name...).
+
+    Attributes:
+        name: the object's name.
+        field: the offending argument (``"shape"``, ``"size"``, ``"mass"``, ...).
+        problem: what is wrong and what would be right.
+    """
+
+    def __init__(self, name: object, field: str, problem: str) -> None:
+        self.name, self.field, self.problem = name, field, problem
+        super().__init__(f"object {shown_name(name)}: {field}: {problem}")
 
 
 class UnknownObject(ArmfleetError):
@@ -187,6 +198,53 @@ class NameInUse(ArmfleetError):
         super().__init__(
             f"name {name!r} is already used in this world by {kind}; names are unique across "
             f"arms ({_choices(arms)}) and objects ({_choices(objects)})"
+        )
+
+
+class FrameInUse(ArmfleetError):
+    """A new arm or object with a frame another arm or object owns already.
+
+    Attributes:
+        frame: the frame both would own.
+        claimant: the newcomer, e.g. ``"arm x_panda"``.
+        owner: who owns the frame, e.g. ``"arm x"``.
+    """
+
+    def __init__(self, frame: str, claimant: str, owner: str) -> None:
+        self.frame, self.claimant, self.owner = frame, claimant, owner
+        super().__init__(
+            f"{claimant} would own frame {frame!r}, which is {owner}'s already; every frame "
+            f"has one owner: give the {claimant.split()[0]} another name"
+        )
+
+
+class StartPoseCollision(ArmfleetError):
+    """An arm that would touch something the moment it enters the world.
+
+    Attributes:
+        arm: the arm's name.
+        link: its link that would touch.
+        other: what it would touch: an arm, an object, ``"ground"``, or ``arm`` itself.
+        other_link: the link of ``other`` (``""`` for an object or the ground).
+        distance_m: signed distance between the two [m]; negative: overlap.
+        clearance_m: the clearance required [m].
+    """
+
+    def __init__(
+        self, arm: str, link: str, other: str, other_link: str, distance_m: float,
+        clearance_m: float,
+    ) -> None:  # fmt: skip
+        self.arm, self.link, self.other, self.other_link = arm, link, other, other_link
+        self.distance_m, self.clearance_m = distance_m, clearance_m
+        what = "itself" if other == arm else other
+        gap = (
+            f"{-distance_m * 1e3:.1f} mm into it"
+            if distance_m < 0
+            else f"{distance_m * 1e3:.2f} mm from it, closer than {clearance_m * 1e3:g} mm"
+        )
+        super().__init__(
+            f"{arm} would touch {what} at its start pose ({link} / {other_link or other}, "
+            f"{gap}); nothing was spawned: choose a base pose or initial positions clear of it"
         )
 
 

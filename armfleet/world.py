@@ -25,7 +25,8 @@ from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.controllers.fleet_update import FleetUpdate
 from armfleet.description import ModelLibrary
-from armfleet.errors import ArmfleetError, NameInUse, ObjectError, UnknownArm, WorldClosed
+from armfleet.errors import ArmfleetError, NameInUse, UnknownArm, WorldClosed
+from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
 from armfleet.joint_memory import JointMemory
 from armfleet.kinematics import ArmKinematics
@@ -106,6 +107,7 @@ class World:
         self._tf = TfTree(self._arm_states, lambda: self._objects.objects)
         self._contacts = ContactMonitor(self._client, self._ground, self._bus, self._on_contact)
         self._objects = ObjectSet(self._client, self._bus, self._contacts)
+        self._frames = FrameRegistry()  # every frame has one owner: arm or object
         self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
         self._requests = RequestQueue()
@@ -232,6 +234,10 @@ class World:
                 shipped ``controllers/<type>.yaml`` by default.
 
         Raises:
+            StartPoseCollision: at its start configuration the arm would touch
+                itself, the floor, another arm or an object (nothing is spawned).
+            FrameInUse: one of its frames (``<name>_<link>``) is another arm's or an
+                object's.
             ArmfleetError: bad name, model, pose or positions; the world is unchanged.
         """
         self._check_open()
@@ -242,6 +248,8 @@ class World:
         description = self._models.expand(model, f"{name}_", pose)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(name, kinematics, description.home, initial_positions)
+        frames = arm_frames(kinematics)
+        self._frames.check(FrameOwner.arm(name), frames)
         started = time.perf_counter()
         arm = assemble_arm(
             name=name,
@@ -259,8 +267,10 @@ class World:
             parameters=parameters or {},
             parameter_files=parameter_files or {},
             frame_pose=self._tf.world_pose,
+            neighbours=self._contacts.neighbours(),
         )
         self._arms[name] = arm
+        self._frames.claim(FrameOwner.arm(name), frames)
         self._controllers.lay_out(self._arms.values())
         self._contacts.add_arm(name, arm.body)
         try:
@@ -288,6 +298,7 @@ class World:
         arm.state_publisher.close()
         arm.body.remove()
         del self._arms[arm.name]
+        self._frames.release(FrameOwner.arm(arm.name))
         self._controllers.lay_out(self._arms.values())
         self._bus.unadvertise(arm.namespace, f"arm {arm.name} was removed")  # subscribers told
 
@@ -340,6 +351,7 @@ class World:
             rolling_friction: rolling resistance [m].
 
         Raises:
+            FrameInUse: an arm owns a frame named ``name`` already.
             ArmfleetError: a bad argument or a name in use; the world is unchanged.
         """
         self._check_open()
@@ -359,10 +371,13 @@ class World:
         )
         kind = "an arm" if name in self._arms else ("an object" if name in self._objects else "")
         self._check_name_free(name, kind)
-        for arm in self._arms.values():
-            if arm.kinematics.has_frame(name):
-                raise ObjectError(name, "name", f"already a frame of arm {arm.name}")
-        obj = self._objects.add(spec, self.time)
+        owner = FrameOwner.object(name)
+        self._frames.claim(owner, (name,))
+        try:
+            obj = self._objects.add(spec, self.time)
+        except BaseException:
+            self._frames.release(owner)
+            raise
         if self._viewer is not None:
             self._viewer.add_object(obj)
         return obj
@@ -374,6 +389,7 @@ class World:
         if self._viewer is not None:
             self._viewer.remove_object(name)
         self._objects.remove(name)
+        self._frames.release(FrameOwner.object(name))
 
     def _check_name_free(self, name: str, used_by: str) -> None:
         if used_by:

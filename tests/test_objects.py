@@ -324,7 +324,7 @@ def test_names_are_unique_across_arms_and_objects(world: armfleet.World) -> None
         world.add_object("box", "sphere", size=0.1)
     with pytest.raises(armfleet.NameInUse, match=r"'box' .* by an object"):
         world.spawn("box", at=(2, 0))
-    with pytest.raises(armfleet.ObjectError, match="already a frame of arm bob"):
+    with pytest.raises(armfleet.FrameInUse, match="frame 'bob_tool0', which is arm bob's"):
         world.add_object("bob_tool0", "sphere", size=0.1)
     assert list(world.objects) == ["box"] and list(world.arms) == ["bob"]
     with pytest.raises(armfleet.UnknownObject, match="no object named 'bx'; objects: box"):

@@ -201,8 +201,8 @@ CASES = [
     Case(
         "base inside another arm",
         lambda t: one(request("spawn", {"name": "carol", "at": [0.1, 0]})),
-        "PoseError",
-        "bases must be >= 0.25 m apart",
+        "StartPoseCollision",
+        "carol would touch bob at its start pose",
     ),
     Case(
         "NaN spawn pose",

@@ -53,7 +53,7 @@ def fails(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
         (["topic"], "required: {list,echo}"),
         (["topic", "show"], "invalid choice: 'show'"),
         (["step"], "the world is running; pause it first"),
-        (["spawn", "carol", "--at", "0.1,0"], "bases must be >= 0.25 m apart"),
+        (["spawn", "carol", "--at", "0.1,0"], "carol would touch bob at its start pose"),
         (["spawn", "carol", "--at", "2,0", "--model", "pand"], AVAILABLE_MODELS),
         (["spawn", "bob", "--at", "2,0"], "'bob' is already used in this world"),
         (

@@ -96,7 +96,7 @@ BAD_SPECS = {
     "two orientations": ("arms:\n" + BOB + "    yaw_deg: 90\n    rpy_deg: [0, 0, 90]\n", 5,
                          "not both yaw_deg and rpy_deg"),
     "overlapping bases": ("arms:\n" + BOB + "  - name: toby\n    model: panda\n"
-                          "    at_m: [0.1, 0.05]\n", 6, "bases must be >= 0.25 m apart"),
+                          "    at_m: [0.1, 0.05]\n", 6, "toby would touch bob at its start pose"),
     "initial positions length": ("arms:\n" + BOB + "    initial_positions: [0, 0]\n", 4,
                                  "expected 7"),
     "initial position out of limits": (
@@ -120,7 +120,7 @@ BAD_SPECS = {
     "grid rows not whole": ("grid:\n  rows: 2.5\n  columns: 2\n  spacing_m: 1\n  model: panda\n",
                             2, "not a whole number"),
     "grid too dense": ("grid:\n  rows: 2\n  columns: 2\n  spacing_m: 0.1\n  model: panda\n", 4,
-                       "bases must be >= 0.25 m apart"),
+                       "arm0_1 would touch arm0_0 at its start pose"),
     "object shape unknown": ("objects:\n" + BOX + "  - name: can\n    shape: cilinder\n", 6,
                              "objects[1].shape: unknown shape 'cilinder'; "
                              "valid: box, cylinder, sphere, mesh"),

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import enum
 import math
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +18,7 @@ import numpy as np
 
 from armfleet.errors import ObjectError
 from armfleet.messages import FloatArray
-from armfleet.names import ARM_NAME_PATTERN
+from armfleet.names import name_problem
 from armfleet.objects.mesh_file import MESH_SUFFIXES, mesh_extents
 
 #: Names no object may take: the root frame and the floor's body name on ``/collisions``.
@@ -38,7 +37,6 @@ DEFAULT_COLOR = (0.85, 0.55, 0.2, 1.0)
 #: Largest size of an object [m] and mass [kg] accepted: beyond is a typo.
 MAX_SIZE_M = 100.0
 MAX_MASS_KG = 10_000.0
-_NAME = re.compile(ARM_NAME_PATTERN)
 
 
 class Shape(enum.Enum):
@@ -143,13 +141,10 @@ def pose_matrix(at: Sequence[float], rpy_deg: Sequence[float]) -> FloatArray:
 
 def check_object_name(name: object) -> str:
     """``name`` if it is a well-formed object name (the arm-name rule, not reserved)."""
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise ObjectError(
-            name,
-            "name",
-            f"malformed; a name must match {ARM_NAME_PATTERN} "
-            "(lowercase letter first, then lowercase letters, digits or '_')",
-        )
+    problem = name_problem(name)
+    if problem is not None:
+        raise ObjectError(name, "name", problem)
+    assert isinstance(name, str)  # name_problem checked it
     if name in RESERVED_NAMES:
         raise ObjectError(name, "name", f"reserved; names may not be {', '.join(RESERVED_NAMES)}")
     return name

@@ -9,13 +9,12 @@ are its own, with its own messages.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any
 
 from armfleet.arm import Arm
 from armfleet.bus import Subscription
-from armfleet.errors import ArmFault, ArmfleetError, PoseError, ProtectiveStopError
+from armfleet.errors import ArmFault, ArmfleetError, ProtectiveStopError
 from armfleet.launch import spawn_from_spec
 from armfleet.messages import ArmMode, JointCommand
 from armfleet.remote.arguments import Arguments
@@ -28,7 +27,6 @@ from armfleet.remote.run_state import RunState
 from armfleet.remote.subscription_queue import SubscriptionQueue
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec import ArmSpec, ControllerConfig
-from armfleet.spec.fleet_checks import MIN_BASE_SEPARATION_M
 from armfleet.world import World
 
 Work = Callable[[], Any]
@@ -174,7 +172,6 @@ class WorldServices:
         world = self._world
 
         def spawn() -> dict[str, Any]:
-            _check_separation(world, spec)
             return describe_arm(world, spawn_from_spec(world, spec))
 
         return spawn
@@ -359,18 +356,6 @@ def _controllers(args: Arguments) -> dict[str, ControllerConfig]:
             parameters={key: checked.number(key, finite=False) for key in fields}
         )
     return controllers
-
-
-def _check_separation(world: World, spec: ArmSpec) -> None:
-    """Refuse a base inside another arm's, as launch specs do."""
-    pose = spec.pose
-    for other in world.arms.values():
-        distance = math.dist((pose.x, pose.y), (other.pose.x, other.pose.y))
-        if distance < MIN_BASE_SEPARATION_M and abs(pose.z - other.pose.z) < 0.3:
-            raise PoseError(
-                f"base of {spec.name} would be {distance:.3f} m from {other.name}'s; bases "
-                f"must be >= {MIN_BASE_SEPARATION_M} m apart"
-            )
 
 
 def require_known(service: str) -> Service:

@@ -1,12 +1,13 @@
-"""Checks across a spec's arms: names, models, overlaps, joint limits, controller parameters.
+"""Checks of a spec's arms: names, models, joint limits, controller parameters.
 
 They use the same checks as :meth:`armfleet.World.spawn`, so a spec that passes
-``armfleet launch --check`` brings up without a surprise.
+``armfleet launch --check`` brings up without a surprise. Whether arms touch
+each other, the floor or the objects, and who owns each frame, is asked after
+these by :mod:`armfleet.spec.scene_rehearsal`, with the world's own rules.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -20,9 +21,6 @@ from armfleet.located_yaml import LocatedDict
 from armfleet.names import check_arm_name
 from armfleet.spec.fleet_spec import ArmSpec
 from armfleet.spec.spec_reader import SpecReader
-
-#: Bases closer than this (and at similar heights) would stand inside each other [m].
-MIN_BASE_SEPARATION_M = 0.25
 
 LocatedArm = tuple[ArmSpec, LocatedDict, str]
 
@@ -50,14 +48,6 @@ def check_fleet(
             fail("name", f"arm name {arm.name!r} is used twice; names must be unique")
         if arm.model not in available:
             fail("model", f"model {arm.model!r} not found; available: {', '.join(available)}")
-        for other in seen.values():
-            distance = math.dist((arm.pose.x, arm.pose.y), (other.pose.x, other.pose.y))
-            if distance < MIN_BASE_SEPARATION_M and abs(arm.pose.z - other.pose.z) < 0.3:
-                fail(
-                    "at_m" if "at_m" in entry else "spacing_m",
-                    f"base of {arm.name} is {distance:.3f} m from {other.name}'s; bases must be "
-                    f">= {MIN_BASE_SEPARATION_M} m apart",
-                )
         seen[arm.name] = arm
         if arm.initial_positions is not None:
             if arm.model not in limits:

@@ -74,11 +74,14 @@ def read_objects(
     base_dir: Path | None,
     arm_names: Collection[str],
     orientation: Orientation,
+    on_object: Callable[[ObjectSpec, LocatedDict, str], None] | None = None,
 ) -> tuple[ObjectSpec, ...]:
     """Check the spec's ``objects:`` list; names must differ from each other and the arms'.
 
     Args:
         orientation: reads ``(roll, pitch, yaw)`` [deg] from an entry's orientation keys.
+        on_object: called with each object that passed these checks, its entry and
+            field (e.g. to claim its frame; it raises the :class:`SpecError`).
     """
     if "objects" not in top:
         return ()
@@ -93,6 +96,8 @@ def read_objects(
             raise reader.error(*where, f"name {spec.name!r} is an arm's; names must be unique")
         if any(o.name == spec.name for o in objects):
             raise reader.error(*where, f"object name {spec.name!r} is used twice")
+        if on_object is not None:
+            on_object(spec, entry, field)
         objects.append(spec)
     return tuple(objects)
 
