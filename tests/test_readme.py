@@ -10,11 +10,16 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+import armfleet
+from tests.remote_world import WorldProcess, cli
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -36,6 +41,8 @@ RUN_ELSEWHERE = {
 }
 #: Longest README: the short path fits a couple of screens (it was 610 lines).
 MAX_README_LINES = 150
+#: How close an arm at rest holds its target [rad].
+HOLD_TOLERANCE_RAD = 1e-3
 ARMFLEET = (sys.executable, "-m", "armfleet.cli.main")
 
 
@@ -125,7 +132,7 @@ def test_readme_says_a_spawn_joins_the_running_world_and_how_not_to() -> None:
 
 
 def test_cli_summary_names_every_subcommand_and_only_real_options() -> None:
-    summary = code_blocks(README, "text")[1]
+    summary = code_blocks(README, "text")[2]
     assert summary.lstrip().startswith("armfleet spawn")
     words = set(re.findall(r"[a-z][a-z-]*", summary))
     existing = subcommands()
@@ -165,6 +172,24 @@ def test_the_spawn_output_shown_is_what_a_spawn_prints(tmp_path: Path) -> None:
             line,
             printed,
         )
+
+
+def test_the_live_api_commands_shown_work_on_the_main_job(tmp_path: Path) -> None:
+    """The 'from another terminal' lines, against the main job's world (headless here)."""
+    lines = code_blocks(README, "text")[1].splitlines()
+    commands = [shlex.split(line.split("#")[0]) for line in lines]
+    assert commands and all(command[0] == "armfleet" for command in commands)
+    with WorldProcess(tmp_path, "bob", "toby", "--at", "0,0", "1,0", "--no-viewer") as world:
+        for command in commands:
+            done = cli(tmp_path, *command[1:])
+            assert done.returncode == 0, (command, done.stderr)
+            assert done.stdout.strip(), command
+        with armfleet.connect(world.address) as client:
+            (move,) = [command for command in commands if command[1] == "move"]
+            target = [float(value) for value in move[move.index("--joints") + 1 : -1]]
+            reached = client.arm("bob").positions
+        # The position controller holds a target to well under a milliradian at rest.
+        assert np.abs(reached - target).max() < HOLD_TOLERANCE_RAD
 
 
 LINK = re.compile(r"\]\(([^)\s]+)\)")
