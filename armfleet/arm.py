@@ -19,11 +19,13 @@ from armfleet.errors import (
     ArmInMotion,
     NoGripper,
     ProtectiveStopError,
+    UnknownArm,
     UnreachablePose,
 )
 from armfleet.gripper import Gripper
 from armfleet.inverse_kinematics import InverseKinematics, link_frame, world_goal
 from armfleet.kinematics import ArmKinematics
+from armfleet.lifetime import Lifetime, while_alive
 from armfleet.messages import (
     ArmMode,
     ArmStatus,
@@ -41,6 +43,9 @@ class Arm:
     """One arm: its body, model, controllers and namespace ``/<name>``.
 
     Created by :meth:`armfleet.World.spawn`; not meant to be built by hand.
+    After ``world.remove(name)`` its methods raise :class:`~armfleet.errors.UnknownArm`,
+    after ``world.close()`` :class:`~armfleet.errors.WorldClosed` (see
+    :mod:`armfleet.lifetime`); its name, model, pose and joints stay readable.
     """
 
     def __init__(
@@ -58,8 +63,11 @@ class Arm:
         safety: SafetySupervisor,
         gripper_controller: GripperController | None = None,
         frame_pose: Callable[[str], FloatArray] | None = None,
+        lifetime: Lifetime | None = None,
     ) -> None:
         self._name = name
+        #: Ended when the arm leaves its world (or the world closes).
+        self._lifetime = lifetime or Lifetime(lambda: UnknownArm(name, []))
         self._pose = pose
         self.description = description
         self.body = body
@@ -72,13 +80,20 @@ class Arm:
         self._safety = safety
         self.gripper_controller = gripper_controller
         self._gripper = (
-            None if gripper_controller is None else Gripper(name, gripper_controller, bus)
+            None
+            if gripper_controller is None
+            else Gripper(name, gripper_controller, bus, self._lifetime)
         )
         #: World pose (4x4) of any frame the world knows, for Cartesian goals.
         self._frame_pose = frame_pose
         #: Inverse kinematics of this arm (its own Pinocchio data).
         self.ik = InverseKinematics(kinematics)
         self._linear = LinearPathPlanner(name, self.ik, position_controller)
+
+    @property
+    def lifetime(self) -> Lifetime:
+        """Ended once the arm is removed or its world closed."""
+        return self._lifetime
 
     @property
     def name(self) -> str:
@@ -108,6 +123,7 @@ class Arm:
         return self.position_controller.lower.copy(), self.position_controller.upper.copy()
 
     @property
+    @while_alive
     def gripper(self) -> Gripper:
         """The fingers: ``open()``, ``close(force)``, ``move_to(width)``, ``width``, ``holding``.
 
@@ -123,6 +139,7 @@ class Arm:
         return self._gripper is not None
 
     @property
+    @while_alive
     def joint_state(self) -> JointState:
         """The latest message of ``/<name>/joint_states`` (every movable joint)."""
         latest = self.broadcaster.latest
@@ -130,16 +147,19 @@ class Arm:
         return latest
 
     @property
+    @while_alive
     def positions(self) -> FloatArray:
         """Current positions of :attr:`joint_names`, read at the last step."""
         positions: FloatArray = self.body.position[self.kinematics.arm_indices].copy()
         return positions
 
     @property
+    @while_alive
     def is_moving(self) -> bool:
         """Whether the position controller's reference is still in motion."""
         return self.position_controller.is_moving
 
+    @while_alive
     def status(self, stamp: float) -> ArmStatus:
         """What the arm is doing now (also published on ``/<name>/status``)."""
         controller = self.position_controller
@@ -158,6 +178,7 @@ class Arm:
     def mode(self) -> ArmMode:
         return self.status(0.0).mode
 
+    @while_alive
     def reset_stop(self) -> None:
         """Accept commands again after a protective stop (the arm holds where it stopped).
 
@@ -165,11 +186,13 @@ class Arm:
         """
         self._safety.reset_stop(self)
 
+    @while_alive
     def reset(self) -> None:
         """Leave ``error`` (restarting the controllers at the current pose) and any stop."""
         self.controller_manager.reset()
         self._safety.reset_stop(self)
 
+    @while_alive
     def move_to(self, positions: Positions) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
 
@@ -188,6 +211,7 @@ class Arm:
         self._publish_command(values)
         return plan.duration
 
+    @while_alive
     def start_plan(self, values: FloatArray, plan: MotionPlan) -> None:
         """Follow ``plan`` to ``values``, made by ``position_controller.plan`` at this
         step (e.g. with a minimum duration, by :meth:`armfleet.World.move_together`)."""
@@ -200,6 +224,7 @@ class Arm:
             JointCommand(tuple(float(v) for v in values)),
         )
 
+    @while_alive
     def solve_ik(
         self,
         pose: Any,
@@ -233,6 +258,7 @@ class Arm:
         positions: FloatArray = solution.positions[self.kinematics.arm_indices].copy()
         return positions
 
+    @while_alive
     def move_to_pose(
         self, pose: Any, frame: str = "world", *, link: str = "tool0", linear: bool = False
     ) -> float:

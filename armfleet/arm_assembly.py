@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ArmDescription
 from armfleet.errors import DescriptionError, ParameterError
 from armfleet.kinematics import ArmKinematics
+from armfleet.lifetime import Lifetime
 from armfleet.messages import FloatArray, Positions
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
@@ -32,15 +34,36 @@ ControllerOverrides = Mapping[str, Mapping[str, Any]]
 
 
 def check_controller_parameters(
-    parameters: Mapping[str, Any], parameter_files: Mapping[str, Path]
-) -> None:
+    parameters: Mapping[str, Any], parameter_files: Mapping[str, str | os.PathLike[str]]
+) -> dict[str, Path]:
     """Validate every controller's file and overrides before any part of the arm exists.
 
+    Returns:
+        ``parameter_files`` with every path as a :class:`~pathlib.Path`.
+
     Raises:
-        ParameterError: unknown controller, overrides that are not a mapping, or
-            a file/override that does not fit the controller's schema.
+        ParameterError: either argument not a mapping, a file that is not a path,
+            unknown controller, overrides that are not a mapping, or a
+            file/override that does not fit the controller's schema.
     """
-    unknown = (set(parameters) | set(parameter_files)) - set(CONTROLLER_TYPES)
+    for argument, given, meaning in (
+        ("parameters", parameters, "{controller: {parameter: value}}"),
+        ("parameter_files", parameter_files, "{controller: path of a .yaml file}"),
+    ):
+        if not isinstance(given, Mapping):
+            raise ParameterError(
+                f"{argument} must be a mapping {meaning}, got {type(given).__name__} "
+                f"{given!r}; controllers: {', '.join(CONTROLLER_TYPES)}"
+            )
+    files: dict[str, Path] = {}
+    for controller, file in parameter_files.items():
+        if not isinstance(file, str | os.PathLike):
+            raise ParameterError(
+                f"parameter_files[{controller!r}] must be the path of a .yaml file "
+                f"(str or Path), got {type(file).__name__} {file!r}"
+            )
+        files[controller] = Path(file)
+    unknown = (set(parameters) | set(files)) - set(CONTROLLER_TYPES)
     if unknown:
         raise ParameterError(
             f"parameters for unknown controllers {', '.join(sorted(map(str, unknown)))}; "
@@ -54,8 +77,9 @@ def check_controller_parameters(
                 f"got {type(overrides).__name__}"
             )
         load_parameters(
-            controller, controller_type.parameter_schema, parameter_files.get(controller), overrides
+            controller, controller_type.parameter_schema, files.get(controller), overrides
         )
+    return files
 
 
 def start_positions(
@@ -97,6 +121,7 @@ def assemble_arm(
     parameters: ControllerOverrides,
     parameter_files: Mapping[str, Path],
     frame_pose: Callable[[str], FloatArray] | None = None,
+    lifetime: Lifetime | None = None,
     neighbours: Iterable[Neighbour] = (),
 ) -> Arm:
     """Load the body (brakes on, at ``start``) and configure its controllers.
@@ -106,6 +131,7 @@ def assemble_arm(
 
     ``frame_pose`` gives the world pose (4x4) of any frame the world knows
     (e.g. ``world.tf.world_pose``): Cartesian goals may be given in them.
+    ``lifetime`` is the arm's (see :mod:`armfleet.lifetime`), ended by the world.
 
     Both parameter sets are validated before the arm is returned; on any error
     the body is removed again and the world is as it was.
@@ -148,5 +174,5 @@ def assemble_arm(
     publisher = RobotStatePublisher(name, kinematics, bus, stamp)
     return Arm(
         name, pose, description, body, kinematics, bus, manager, broadcaster, controller,
-        publisher, safety, gripper, frame_pose,
+        publisher, safety, gripper, frame_pose, lifetime,
     )  # fmt: skip

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from armfleet.bus import Bus
 from armfleet.controllers.gripper_controller import GripperController
+from armfleet.lifetime import Lifetime, while_alive
 from armfleet.messages import GripperCommand, GripperMode, GripperState
+from armfleet.real_numbers import real_number
 
 
 class Gripper:
@@ -12,22 +14,40 @@ class Gripper:
 
     Commands return at once and go out on ``/<arm>/gripper_controller/commands``;
     step the world to see them carried out. Invalid ones raise
-    :class:`armfleet.errors.GripperCommandError` and change nothing.
+    :class:`armfleet.errors.GripperCommandError` (out of range, not finite) or
+    :class:`armfleet.errors.InvalidNumber` (not a number: text, bool, None) and
+    change nothing.
+    Like its arm, it raises :class:`~armfleet.errors.UnknownArm` once the arm is
+    removed and :class:`~armfleet.errors.WorldClosed` once the world is closed.
     """
 
-    def __init__(self, arm: str, controller: GripperController, bus: Bus) -> None:
+    def __init__(
+        self, arm: str, controller: GripperController, bus: Bus, lifetime: Lifetime
+    ) -> None:
+        self._arm = arm
         self._controller = controller
         self._bus = bus
         self._topic = f"/{arm}/gripper_controller/commands"
+        self._lifetime = lifetime
 
+    @property
+    def lifetime(self) -> Lifetime:
+        """Its arm's: ended once the arm is removed or its world closed."""
+        return self._lifetime
+
+    @while_alive
     def open(self, *, force: float | None = None) -> None:
         """Open to the widest width."""
         self.move_to(self._controller.max_width, force=force)
 
+    @while_alive
     def move_to(self, width: float, *, force: float | None = None) -> None:
         """Go to the opening ``width`` [m], pushing with at most ``force`` [N] per finger."""
-        self._send(GripperCommand(float(width), False, self._force(force)))
+        valid = f"a width in [0, {self.max_width:g}] m"
+        number = real_number(width, f"{self._arm}: gripper width", valid, finite=False)
+        self._send(GripperCommand(number, False, self._force(force)))
 
+    @while_alive
     def close(self, force: float | None = None) -> None:
         """Close until blocked, then press with ``force`` [N] per finger (the
         ``grasp_force_n`` parameter by default)."""
@@ -36,13 +56,15 @@ class Gripper:
     def _force(self, force: float | None) -> float:
         if force is None:
             return min(float(self._controller.parameters["grasp_force_n"]), self.max_force)
-        return float(force)
+        valid = f"a force in (0, {self.max_force:g}] N"
+        return real_number(force, f"{self._arm}: gripper force", valid, finite=False)
 
     def _send(self, command: GripperCommand) -> None:
         self._controller.check(command)
         self._bus.publish(self._topic, command)
 
     @property
+    @while_alive
     def width(self) -> float:
         """Measured opening between the finger pads [m]."""
         return self._controller.width
@@ -58,27 +80,33 @@ class Gripper:
         return self._controller.max_force
 
     @property
+    @while_alive
     def force(self) -> float:
         """Force each finger presses with now [N] (positive closing)."""
         return self._controller.force
 
     @property
+    @while_alive
     def mode(self) -> GripperMode:
         return self._controller.mode
 
     @property
+    @while_alive
     def holding(self) -> bool:
         """Whether the fingers squeeze something both of them touch."""
         return self._controller.holding
 
     @property
+    @while_alive
     def is_moving(self) -> bool:
         """Whether the fingers are still on their way (to a width, or closing)."""
         return self._controller.mode in (GripperMode.MOVING, GripperMode.CLOSING)
 
+    @while_alive
     def state(self, stamp: float = 0.0) -> GripperState:
         """The gripper's state (as published on ``/<arm>/gripper_controller/state``)."""
         return self._controller.gripper_state(stamp)
 
     def __repr__(self) -> str:
-        return f"Gripper(width={self.width:.4f} m, mode={self.mode.value!r})"
+        controller = self._controller  # a removed arm's gripper still prints
+        return f"Gripper(width={controller.width:.4f} m, mode={controller.mode.value!r})"

@@ -35,6 +35,7 @@ import pinocchio as pin
 from armfleet.errors import TargetPoseError, UnknownFrame
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
+from armfleet.real_numbers import all_real
 
 #: Orthonormality and last-row tolerance of a 4x4 pose given by a user.
 POSE_TOLERANCE = 1e-6
@@ -50,10 +51,12 @@ def as_se3(pose: Any) -> pin.SE3:
         TargetPoseError: not 4x4, not finite, or not a rigid transform.
     """
     if isinstance(pose, pin.SE3):
-        return pin.SE3(pose)
+        pose = pose.homogeneous  # checked as any matrix: pin.SE3 takes any 3x3 and NaN
+    if not all_real(pose):
+        raise TargetPoseError("a pose must be a 4x4 homogeneous matrix of numbers (or a pin.SE3)")
     try:
         matrix = np.asarray(pose, dtype=float)
-    except (TypeError, ValueError):
+    except ValueError:  # ragged rows
         raise TargetPoseError("a pose must be a 4x4 homogeneous matrix of numbers") from None
     if matrix.shape != (4, 4):
         raise TargetPoseError(f"a pose must be a 4x4 homogeneous matrix, got shape {matrix.shape}")
@@ -84,8 +87,8 @@ def world_goal(pose: Any, frame: str, frame_pose: Callable[[str], FloatArray] | 
 
 def link_frame(arm: str, kinematics: ArmKinematics, prefix: str, link: str) -> str:
     """The prefixed frame of ``link`` (given with or without the arm's prefix)."""
-    name = link if link.startswith(prefix) else prefix + link
-    if not kinematics.has_frame(name):
+    name = prefix + link.removeprefix(prefix) if isinstance(link, str) else ""
+    if not name or not kinematics.has_frame(name):
         links = (n.removeprefix(prefix) for n in kinematics.link_names if n != "world")
         raise UnknownFrame(link, f"links of {arm}: {', '.join(sorted(links))}")
     return name

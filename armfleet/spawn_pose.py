@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from armfleet.errors import PoseError
+from armfleet.real_numbers import is_real, is_real_vector
 
 AT_SYNTAX = "X,Y[,Z[,YAW_DEG]]"
 
@@ -38,21 +39,22 @@ class SpawnPose:
             ("yaw", self.yaw_deg), ("roll", self.roll_deg), ("pitch", self.pitch_deg),
         )  # fmt: skip
         for field, value in fields:
+            if not is_real(value):
+                raise PoseError(f"spawn pose {field} is {value!r}; it must be a finite number")
             if not math.isfinite(value):
                 raise PoseError(f"spawn pose {field} is {value}; it must be a finite number")
 
     @classmethod
     def from_values(cls, values: Sequence[float] | SpawnPose) -> SpawnPose:
-        """Build from ``(x, y[, z[, yaw_deg]])``."""
+        """Build from ``(x, y[, z[, yaw_deg]])`` [m, deg], numbers (not text or bool)."""
         if isinstance(values, SpawnPose):
             return values
-        if isinstance(values, str | bytes) or not 2 <= len(values) <= 4:
-            raise PoseError(f"spawn pose {values!r} must be (x, y[, z[, yaw_deg]])")
-        try:
-            numbers = [float(v) for v in values]
-        except (TypeError, ValueError) as exc:
-            raise PoseError(f"spawn pose {values!r} must hold numbers: {exc}") from None
-        return cls(*numbers)
+        if not is_real_vector(values) or not 2 <= len(values) <= 4:
+            raise PoseError(
+                f"spawn pose {values!r} must be (x, y[, z[, yaw_deg]]) of numbers [m, deg], "
+                "or a SpawnPose"
+            )
+        return cls(*(float(v) for v in values))
 
     @classmethod
     def parse(cls, text: str) -> SpawnPose:

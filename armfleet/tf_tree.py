@@ -7,8 +7,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from armfleet.errors import UnknownFrame
+from armfleet.errors import UnknownFrame, WorldClosed
 from armfleet.kinematics import ArmKinematics
+from armfleet.lifetime import Lifetime, while_alive
 from armfleet.messages import FloatArray
 
 if TYPE_CHECKING:
@@ -25,16 +26,25 @@ class TfTree:
         arms: callable returning, per arm name, its kinematics and the current
             joint positions (read from the physics engine at the last step).
         objects: callable returning the scene objects by name (frame ``<object>``).
+        lifetime: its world's; lookups raise :class:`~armfleet.errors.WorldClosed`
+            once it has ended.
     """
 
     def __init__(
         self,
         arms: Callable[[], Mapping[str, tuple[ArmKinematics, FloatArray]]],
         objects: Callable[[], Mapping[str, WorldObject]] | None = None,
+        lifetime: Lifetime | None = None,
     ) -> None:
         self._arms = arms
         self._objects = objects
+        self._lifetime = lifetime or Lifetime(WorldClosed)
 
+    @property
+    def lifetime(self) -> Lifetime:
+        return self._lifetime
+
+    @while_alive
     def world_pose(self, frame: str) -> FloatArray:
         """4x4 pose of ``frame`` in ``world``."""
         if frame == WORLD_FRAME:
@@ -55,6 +65,7 @@ class TfTree:
             f"e.g. <arm>_base_link, <arm>_tool0) and the objects ({listed})",
         )
 
+    @while_alive
     def lookup(self, target_frame: str, source_frame: str) -> FloatArray:
         """Pose of ``source_frame`` in ``target_frame`` (4x4), as tf2's lookupTransform.
 

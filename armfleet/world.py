@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import builtins
 import logging
-import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Future
@@ -30,6 +29,7 @@ from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
 from armfleet.joint_memory import JointMemory
 from armfleet.kinematics import ArmKinematics
+from armfleet.lifetime import Lifetime
 from armfleet.messages import (
     BringupEvent,
     Contact,
@@ -45,11 +45,13 @@ from armfleet.objects.object_spec import (
     DEFAULT_ROLLING_FRICTION_M,
     DEFAULT_SPINNING_FRICTION_M,
 )
+from armfleet.real_numbers import real_number
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 from armfleet.synchronised_motion import move_together
 from armfleet.tf_tree import TfTree
+from armfleet.time_step import check_dt
 
 if TYPE_CHECKING:
     from armfleet.recording import Recorder
@@ -68,8 +70,8 @@ class World:
     """A PyBullet world (DIRECT mode) with gravity, a floor at z = 0 and arms.
 
     Args:
-        dt: physics step [s].
-        gravity: gravitational acceleration along -z [m/s^2].
+        dt: physics step [s], in [``MIN_DT_S``, ``MAX_DT_S``] of :mod:`armfleet.time_step`.
+        gravity: gravitational acceleration along -z [m/s^2], in [-100, 100].
         models: library of arm models; armfleet's ``description/`` by default.
         viewer: start a MeshCat viewer (``world.viewer.url``); if it cannot
             start, the world runs without it and the reason is logged.
@@ -85,12 +87,8 @@ class World:
         viewer: bool = False,
         viewer_port: int | None = None,
     ) -> None:
-        if not (math.isfinite(dt) and 0 < dt <= 0.1):
-            raise ArmfleetError(f"dt = {dt} s is invalid; choose a step in (0, 0.1] s")
-        if not (math.isfinite(gravity) and abs(gravity) <= 100.0):
-            raise ArmfleetError(
-                f"gravity = {gravity} m/s^2 is invalid; give a value in [-100, 100]"
-            )
+        dt = check_dt(dt)
+        gravity = real_number(gravity, "gravity", "[-100, 100] m/s^2", low=-100.0, high=100.0)
         self._dt = dt
         self._client: int = p.connect(p.DIRECT)
         p.setTimeStep(dt, physicsClientId=self._client)
@@ -103,10 +101,11 @@ class World:
         self._memory = JointMemory(self._client)
         self._controllers = FleetUpdate(self._memory)
         self._step_index = 0
-        self._closed = False
-        self._tf = TfTree(self._arm_states, lambda: self._objects.objects)
+        #: Ended by close(); every arm's lifetime is a child of it.
+        self._lifetime = Lifetime(WorldClosed)
+        self._tf = TfTree(self._arm_states, lambda: self._objects.objects, self._lifetime)
         self._contacts = ContactMonitor(self._client, self._ground, self._bus, self._on_contact)
-        self._objects = ObjectSet(self._client, self._bus, self._contacts)
+        self._objects = ObjectSet(self._client, self._bus, self._contacts, self._lifetime)
         self._frames = FrameRegistry()  # every frame has one owner: arm or object
         self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
@@ -204,6 +203,10 @@ class World:
             ArmfleetError: an unknown arm or any bad target; then no arm moves.
         """
         self._check_open()
+        if not isinstance(targets, Mapping):
+            raise ArmfleetError(
+                f"move_together takes a mapping {{arm name: target}}, got {type(targets).__name__}"
+            )
         return move_together({name: (self.arm(name), t) for name, t in targets.items()})
 
     # -- bring-up ---------------------------------------------------------------------
@@ -215,7 +218,7 @@ class World:
         *,
         initial_positions: Positions | None = None,
         parameters: ControllerOverrides | None = None,
-        parameter_files: Mapping[str, Path] | None = None,
+        parameter_files: Mapping[str, str | Path] | None = None,
     ) -> Arm:
         """Bring an arm up, stage by stage, and return it once ready.
 
@@ -244,7 +247,7 @@ class World:
         check_arm_name(name, self._arms)
         self._check_name_free(name, "an object" if name in self._objects else "")
         pose = SpawnPose.from_values(at)
-        check_controller_parameters(parameters or {}, parameter_files or {})
+        files = check_controller_parameters(parameters or {}, parameter_files or {})
         description = self._models.expand(model, f"{name}_", pose)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(name, kinematics, description.home, initial_positions)
@@ -265,9 +268,10 @@ class World:
             safety=self._safety,
             on_fault=lambda reason: self._publish_status(self._arms[name]),
             parameters=parameters or {},
-            parameter_files=parameter_files or {},
+            parameter_files=files,
             frame_pose=self._tf.world_pose,
             neighbours=self._contacts.neighbours(),
+            lifetime=Lifetime(lambda: UnknownArm(name, list(self._arms)), self._lifetime),
         )
         self._arms[name] = arm
         self._frames.claim(FrameOwner.arm(name), frames)
@@ -297,6 +301,7 @@ class World:
         self._contacts.remove_arm(arm.body)
         arm.state_publisher.close()
         arm.body.remove()
+        arm.lifetime.end()  # the handles users hold raise UnknownArm from now on
         del self._arms[arm.name]
         self._frames.release(FrameOwner.arm(arm.name))
         self._controllers.lay_out(self._arms.values())
@@ -451,8 +456,7 @@ class World:
             realtime: pace the steps to the wall clock instead of running flat out.
             on_step: called after every step (e.g. for logging).
         """
-        if not (math.isfinite(duration) and duration >= 0):
-            raise ArmfleetError(f"duration = {duration} s is invalid; give a finite time >= 0")
+        duration = real_number(duration, "duration", "a finite time >= 0 s", low=0.0)
         steps = round(duration / self._dt)
         wall_start, sim_start = time.perf_counter(), self.time
         for _ in range(steps):
@@ -469,17 +473,17 @@ class World:
         return {name: (arm.kinematics, arm.body.position) for name, arm in self._arms.items()}
 
     def _check_open(self) -> None:
-        if self._closed:
-            raise WorldClosed()
+        self._lifetime.check()
 
     @property
     def closed(self) -> bool:
-        return self._closed
+        return not self._lifetime.alive
 
     def close(self) -> None:
-        """Disconnect the physics engine; the world can no longer be used."""
-        if not self._closed:
-            self._closed = True
+        """Disconnect the physics engine; the world can no longer be used, nor any
+        handle of it (arms, grippers, ``tf``, objects raise :class:`WorldClosed`)."""
+        if self._lifetime.alive:
+            self._lifetime.end()
             self._requests.cancel_all(WorldClosed())
             try:
                 if self._viewer is not None:

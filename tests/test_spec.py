@@ -83,7 +83,7 @@ BAD_SPECS = {
     "yaml syntax": ("world:\n\tdt_s: 0.001\n", 2, "not valid YAML"),
     "unknown top key": ("arm:\n" + BOB, 1, "did you mean 'arms'"),
     "arms not a list": ("arms: {name: bob}\n", 1, "expected a list"),
-    "dt out of range": ("world:\n  dt_s: 0.5\narms:\n" + BOB, 2, "outside [1e-05, 0.1]"),
+    "dt out of range": ("world:\n  dt_s: 0.5\narms:\n" + BOB, 2, "outside [1e-05, 0.002]"),
     "dt without unit": ("world:\n  dt: 0.001\n", 2, "did you mean 'dt_s'"),
     "realtime not bool": ("world:\n  realtime: maybe\n", 2, "expected true or false"),
     "missing name": ("arms:\n  - model: panda\n", 2, "arms[0].name: required"),

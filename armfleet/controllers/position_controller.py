@@ -49,6 +49,7 @@ from armfleet.errors import (
 )
 from armfleet.joint_memory import JointViews, Row
 from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
+from armfleet.real_numbers import all_real
 
 logger = logging.getLogger("armfleet")
 
@@ -478,9 +479,11 @@ def check_target(
     Raises:
         TargetLengthError, NonFiniteTarget, JointLimitError.
     """
+    if not all_real(target):  # not text, bool, complex or None, which float() would take
+        raise TargetTypeError(arm, joint_names)
     try:
         values = np.asarray(target, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
+    except ValueError:  # ragged
         raise TargetTypeError(arm, joint_names) from None
     if values.size != len(joint_names):
         raise TargetLengthError(arm, values.size, joint_names)

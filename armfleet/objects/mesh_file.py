@@ -1,12 +1,14 @@
 """Mesh files of scene objects (Wavefront OBJ, STL): checked and measured before loading.
 
-PyBullet and MeshCat both read the file; reading its vertices here first turns
-a missing, empty or unreadable file into a clear error, and gives the mesh's
-extents (the object's ``size``).
+PyBullet and MeshCat both read the file; reading its vertices and faces here
+first turns a missing, empty, unreadable or faceless file (a lone vertex, which
+PyBullet refuses with a bare ``pybullet.error``) into a clear error, and gives
+the mesh's extents (the object's ``size``).
 """
 
 from __future__ import annotations
 
+import itertools
 import struct
 from pathlib import Path
 
@@ -23,7 +25,8 @@ def mesh_extents(path: Path) -> FloatArray:
     """Extents (x, y, z) [file units] of the bounding box of the mesh's vertices.
 
     Raises:
-        ValueError: not a file, not .obj/.stl, or without vertices.
+        ValueError: not a file, not .obj/.stl, without vertices, or without a
+            face of non-zero area.
     """
     if path.suffix.lower() not in MESH_SUFFIXES:
         valid = ", ".join(MESH_SUFFIXES)
@@ -34,15 +37,32 @@ def mesh_extents(path: Path) -> FloatArray:
         data = path.read_bytes()
     except OSError as exc:
         raise ValueError(f"cannot read mesh file {str(path)!r}: {exc}") from None
-    vertices = _obj_vertices(data) if path.suffix.lower() == ".obj" else _stl_vertices(data)
+    obj = path.suffix.lower() == ".obj"
+    vertices, triangles = _obj_mesh(data) if obj else _stl_mesh(data)
     if len(vertices) == 0 or not np.isfinite(vertices).all():
         raise ValueError(f"mesh file {str(path)!r} has no (finite) vertices")
     extents: FloatArray = vertices.max(axis=0) - vertices.min(axis=0)
+    if not _has_area(triangles, float(extents.max())):
+        raise ValueError(
+            f"mesh file {str(path)!r} has no face with an area ({len(vertices)} vertices, "
+            f"{len(triangles)} triangles); a mesh needs triangles, not only points or lines"
+        )
     return extents
 
 
-def _obj_vertices(data: bytes) -> FloatArray:
-    rows = []
+def _has_area(triangles: FloatArray, size: float) -> bool:
+    """Whether one of ``triangles`` (n x 3 corners x 3) is not degenerate at this size."""
+    if len(triangles) == 0 or size <= 0.0:
+        return False
+    edges = triangles[:, 1:] - triangles[:, :1]
+    areas = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
+    return bool(areas.max() > 1e-12 * size * size)
+
+
+def _obj_mesh(data: bytes) -> tuple[FloatArray, FloatArray]:
+    """Vertices (n x 3) and the faces' fan triangles (m x 3 x 3) of a Wavefront OBJ."""
+    rows: list[list[float]] = []
+    corners: list[tuple[int, int, int]] = []
     for line in data.decode("utf-8", errors="replace").splitlines():
         parts = line.split()
         if len(parts) >= 4 and parts[0] == "v":
@@ -50,10 +70,20 @@ def _obj_vertices(data: bytes) -> FloatArray:
                 rows.append([float(x) for x in parts[1:4]])
             except ValueError:
                 continue
-    return np.array(rows, dtype=float).reshape(-1, 3)
+        elif len(parts) >= 4 and parts[0] == "f":
+            try:  # "f 1 2 3", "f 1/1/1 2/2/2 3/3/3"; negative indices count from the end
+                index = [int(part.split("/")[0]) for part in parts[1:]]
+            except ValueError:
+                continue
+            index = [i - 1 if i > 0 else len(rows) + i for i in index]
+            if all(0 <= i < len(rows) for i in index):
+                corners.extend((index[0], b, c) for b, c in itertools.pairwise(index[1:]))
+    vertices = np.array(rows, dtype=float).reshape(-1, 3)
+    return vertices, vertices[np.array(corners, dtype=int).reshape(-1, 3)]
 
 
-def _stl_vertices(data: bytes) -> FloatArray:
+def _stl_mesh(data: bytes) -> tuple[FloatArray, FloatArray]:
+    """Vertices (n x 3) and triangles (m x 3 x 3) of a binary or ASCII STL."""
     if len(data) >= _STL_HEADER + 4:
         (count,) = struct.unpack_from("<I", data, _STL_HEADER)
         if len(data) == _STL_HEADER + 4 + count * _STL_TRIANGLE.size:  # binary STL
@@ -63,7 +93,8 @@ def _stl_vertices(data: bytes) -> FloatArray:
                 count=count,
                 offset=_STL_HEADER + 4,
             )
-            return triangles["values"][:, 3:].reshape(-1, 3).astype(float)
+            corners = triangles["values"][:, 3:].reshape(-1, 3, 3).astype(float)
+            return corners.reshape(-1, 3), corners
     rows = []
     for line in data.decode("ascii", errors="replace").splitlines():
         parts = line.split()
@@ -72,4 +103,6 @@ def _stl_vertices(data: bytes) -> FloatArray:
                 rows.append([float(x) for x in parts[1:]])
             except ValueError:
                 continue
-    return np.array(rows, dtype=float).reshape(-1, 3)
+    vertices = np.array(rows, dtype=float).reshape(-1, 3)
+    whole = len(vertices) - len(vertices) % 3
+    return vertices, vertices[:whole].reshape(-1, 3, 3)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.errors import UnknownObject
+from armfleet.lifetime import Lifetime
 from armfleet.objects.object_frames import ObjectFramePublisher
 from armfleet.objects.object_spec import ObjectSpec
 from armfleet.objects.world_object import WorldObject
@@ -21,10 +22,14 @@ class ObjectSet:
         client: PyBullet client id of the world.
         bus: the world's bus (``/tf``, ``/tf_static``).
         contacts: the world's contact monitor, told of every body.
+        lifetime: the world's, given to every object.
     """
 
-    def __init__(self, client: int, bus: Bus, contacts: ContactMonitor) -> None:
+    def __init__(
+        self, client: int, bus: Bus, contacts: ContactMonitor, lifetime: Lifetime | None = None
+    ) -> None:
         self._client = client
+        self._lifetime = lifetime
         self._contacts = contacts
         self._frames = ObjectFramePublisher(bus)
         self._objects: dict[str, WorldObject] = {}
@@ -50,7 +55,7 @@ class ObjectSet:
 
     def add(self, spec: ObjectSpec, stamp: float) -> WorldObject:
         """Make ``spec``'s body and frame at simulated time ``stamp`` [s] (name already checked)."""
-        obj = WorldObject(spec, self._client, on_teleport=self._teleported)
+        obj = WorldObject(spec, self._client, self._teleported, self._lifetime)
         self._objects[obj.name] = obj
         self._contacts.add_object(obj.name, obj.body_id, static=obj.is_static)
         if obj.is_static:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import enum
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +21,7 @@ from armfleet.errors import ObjectError
 from armfleet.messages import FloatArray
 from armfleet.names import name_problem
 from armfleet.objects.mesh_file import MESH_SUFFIXES, mesh_extents
+from armfleet.real_numbers import is_real, is_real_vector
 
 #: Names no object may take: the root frame and the floor's body name on ``/collisions``.
 RESERVED_NAMES = ("ground", "world")
@@ -192,12 +194,20 @@ def object_spec(
             raise fail("mesh", f"a mesh object needs mesh=<path to a {'/'.join(MESH_SUFFIXES)}>")
         if size is not None:
             raise fail("size", "a mesh's size comes from its file; give scale instead")
+        if not isinstance(mesh, str | os.PathLike):
+            raise fail("mesh", f"{mesh!r} is not a path; give a {'/'.join(MESH_SUFFIXES)} file")
         path = Path(mesh).expanduser().resolve()
         try:
             extents = mesh_extents(path)
         except ValueError as exc:
             raise fail("mesh", str(exc)) from None
         dimensions = tuple(float(e) * scale for e in extents)
+        if mass_kg > 0.0 and min(dimensions) <= 0.0:
+            raise fail(
+                "mesh",
+                f"{path.name} is flat (extents {list(dimensions)} m); a moving mesh collides "
+                "as its convex hull and needs a volume (mass=0 keeps it static)",
+            )
     else:
         if mesh is not None:
             raise fail("mesh", f"only a mesh object takes a mesh file, not a {kind.value}")
@@ -235,11 +245,10 @@ def _size(name: str, kind: Shape, size: float | Sequence[float] | None) -> tuple
     meaning = f"a {kind.value} takes {SIZE_MEANING[kind]} [m]"
     if size is None:
         raise ObjectError(name, "size", f"required; {meaning}")
-    values: Any = (size,) if isinstance(size, int | float) else size
-    try:
-        numbers = tuple(float(v) for v in values)
-    except (TypeError, ValueError):
-        raise ObjectError(name, "size", f"{size!r} is not numbers; {meaning}") from None
+    values: Any = (size,) if is_real(size) else size
+    if not is_real_vector(values):
+        raise ObjectError(name, "size", f"{size!r} is not numbers; {meaning}")
+    numbers = tuple(float(v) for v in values)
     if len(numbers) != expected:
         raise ObjectError(name, "size", f"got {len(numbers)} numbers; {meaning}")
     if not all(math.isfinite(v) and 0.0 < v <= MAX_SIZE_M for v in numbers):
@@ -250,7 +259,7 @@ def _size(name: str, kind: Shape, size: float | Sequence[float] | None) -> tuple
 
 
 def _number(name: str, field: str, value: Any, lower: float, upper: float, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+    if not is_real(value):
         raise ObjectError(name, field, f"expected a number {unit}, got {value!r}".rstrip())
     number = float(value)
     if not (math.isfinite(number) and lower <= number <= upper):
@@ -259,10 +268,9 @@ def _number(name: str, field: str, value: Any, lower: float, upper: float, unit:
 
 
 def _numbers(name: str, field: str, value: Any, length: int, meaning: str) -> tuple[float, ...]:
-    try:
-        numbers = tuple(float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ObjectError(name, field, f"expected {length} numbers {meaning}") from None
+    if not is_real_vector(value):
+        raise ObjectError(name, field, f"expected {length} numbers {meaning}, got {value!r}")
+    numbers = tuple(float(v) for v in value)
     if len(numbers) != length or not all(math.isfinite(v) for v in numbers):
         raise ObjectError(
             name, field, f"expected {length} finite numbers {meaning}, got {list(numbers)}"

@@ -15,10 +15,12 @@ import numpy as np
 import pinocchio as pin
 import pybullet as p
 
-from armfleet.errors import ObjectError
+from armfleet.errors import ObjectError, WorldClosed
+from armfleet.lifetime import Lifetime
 from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import ObjectSpec, Shape, pose_matrix
+from armfleet.real_numbers import is_real_vector
 
 
 class WorldObject:
@@ -28,6 +30,8 @@ class WorldObject:
         spec: what it is (checked).
         client: PyBullet client id of the world.
         on_teleport: called with the object after :meth:`set_pose`.
+        lifetime: its world's: once the world is closed, reading or moving the
+            object raises :class:`~armfleet.errors.WorldClosed`.
     """
 
     def __init__(
@@ -35,11 +39,16 @@ class WorldObject:
         spec: ObjectSpec,
         client: int,
         on_teleport: Callable[[WorldObject], None] | None = None,
+        lifetime: Lifetime | None = None,
     ) -> None:
         self._spec = spec
+        self._lifetime = lifetime or Lifetime(WorldClosed)
         self._client = client
         self._on_teleport = on_teleport
-        self._shape_id = _collision_shape(spec, client)
+        try:
+            self._shape_id = _collision_shape(spec, client)
+        except p.error:  # PyBullet raises, or returns -1, for a file it cannot use
+            self._shape_id = -1
         if self._shape_id < 0:
             raise ObjectError(spec.name, "mesh", f"PyBullet cannot load {spec.mesh}")
         position, orientation = _position_quaternion(spec.matrix())
@@ -121,8 +130,8 @@ class WorldObject:
     @property
     def pose(self) -> FloatArray:
         """4x4 pose of the object's frame in ``world``, as measured after the last step [m]."""
+        self._check_present()
         if self._pose is None:
-            self._check_present()
             position, orientation = p.getBasePositionAndOrientation(
                 self._body_id, physicsClientId=self._client
             )
@@ -158,9 +167,8 @@ class WorldObject:
         :meth:`armfleet.World.submit`).
         """
         self._check_present()
-        values = [*at, *rpy_deg]
-        if len(values) != 6 or not all(
-            isinstance(v, int | float) and math.isfinite(v) for v in values
+        if not (is_real_vector(at) and is_real_vector(rpy_deg)) or not (
+            len(at) == len(rpy_deg) == 3 and all(math.isfinite(v) for v in [*at, *rpy_deg])
         ):
             raise ObjectError(
                 self.name, "set_pose", "give at=(x, y, z) [m] and rpy_deg=(r, p, y), finite"
@@ -187,6 +195,7 @@ class WorldObject:
             p.removeBody(self._body_id, physicsClientId=self._client)
 
     def _check_present(self) -> None:
+        self._lifetime.check()
         if self._removed:
             raise ObjectError(self.name, "name", "this object was removed from its world")
 

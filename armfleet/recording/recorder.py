@@ -26,6 +26,7 @@ import datetime
 import fnmatch
 import functools
 import logging
+import os
 import re
 import weakref
 from collections.abc import Iterable
@@ -101,11 +102,18 @@ class Recorder:
         topics: Iterable[str] | None = None,
         chunk_bytes: int = CHUNK_BYTES,
     ) -> None:
+        if not isinstance(path, str | os.PathLike):
+            raise RecordingError(f"recording {path!r}: name an MCAP file ending in {SUFFIX}")
         self._path = Path(path)
         if self._path.suffix.lower() != SUFFIX:
             raise RecordingError(f"recording {self._path}: name an MCAP file ending in {SUFFIX}")
         self._world = world
         self._spec = spec
+        if isinstance(topics, str | bytes):
+            raise RecordingError(
+                f"recording {self._path}: topics={topics!r} must be a list of topics or "
+                f"patterns, e.g. [{topics!r}]"
+            )
         self._patterns = None if topics is None else tuple(topics)
         self._chunk_bytes = chunk_bytes
         self._sink: McapSink | None = None

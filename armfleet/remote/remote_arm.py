@@ -5,10 +5,12 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import pinocchio as pin
 
 from armfleet.errors import ArmfleetError, NoGripper
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
 from armfleet.remote.codec import decode_message
+from armfleet.real_numbers import all_real
 from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.spawn_pose import SpawnPose
 
@@ -131,6 +133,8 @@ class RemoteArm:
                 ``UnknownFrame``...); nothing moved and the current motion goes on.
         """
         values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")
+        if isinstance(pose, pin.SE3):
+            pose = pose.homogeneous  # the world checks it is a rigid transform
         key = "position" if np.ndim(pose) == 1 else "pose"
         args = {"name": self._name, key: values, "frame": frame, "link": link, "linear": linear}
         return float(self._client.call("move_pose", args)["duration_s"])
@@ -163,8 +167,10 @@ class RemoteArm:
     def _vector(self, positions: Positions | Any, problem: str | None = None) -> list[float]:
         try:
             values: list[float] = np.asarray(positions, dtype=float).reshape(-1).tolist()
-        except (TypeError, ValueError):
+        except ValueError:
             joints = ", ".join(self._joint_names)
+            if not all_real(positions):  # not text, bool, complex or None (as in the world)
+                raise ValueError(positions)
             problem = problem or f"targets must be numbers, one per joint: {joints}"
             raise ArmfleetError(f"{self._name}: {problem}") from None
         return values

@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING, Any
 
 from armfleet.messages import GripperMode, GripperState
 from armfleet.remote.codec import decode_message
+from armfleet.real_numbers import real_number
 
 if TYPE_CHECKING:
     from armfleet.remote.client import Client
@@ -90,10 +91,14 @@ class RemoteGripper:
 
     def _grip(self, action: str, width: float | None, force: float | None) -> GripperState:
         args: dict[str, Any] = {"name": self._arm, "action": action}
-        if width is not None:
-            args["width"] = float(width)
+        if action == "width":
+            valid = f"a width in [0, {self._max_width:g}] m"
+            args["width"] = real_number(width, f"{self._arm}: gripper width", valid, finite=False)
+        # Text, bool or None are refused here as in the world (InvalidNumber); a number
+        # out of range goes to the world, which names the range.
         if force is not None:
-            args["force"] = float(force)
+            valid = f"a force in (0, {self._max_force:g}] N"
+            args["force"] = real_number(force, f"{self._arm}: gripper force", valid, finite=False)
         return _state(self._client.call("grip", args))
 
     def __repr__(self) -> str:

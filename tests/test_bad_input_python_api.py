@@ -1,0 +1,389 @@
+"""Bad types and time steps through the Python API (issue #14, items 4 and 8).
+
+Every number a user gives goes through one rule (:mod:`armfleet.real_numbers`): text,
+bool, complex and None are not numbers, even where ``float()`` would take them. Each
+case below is one class of bad input; it must raise its own :class:`ArmfleetError`
+subclass with a one-line message naming the argument and what is valid, and leave the
+world untouched (``check_rejected`` of ``test_bad_input``: same arms, bodies, time and
+reference, nothing commanded, bob still holding within 1e-4 rad), nor command the
+gripper.
+
+The step ``dt`` has one range for :class:`armfleet.World` and launch specs
+(:mod:`armfleet.time_step`); at its top every shipped model still brings up and meets
+issue #2's tracking figures.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import armfleet
+from armfleet.description import ModelLibrary
+from armfleet.errors import (
+    ArmfleetError,
+    InvalidNumber,
+    ObjectError,
+    ParameterError,
+    PoseError,
+    TargetPoseError,
+    TargetTypeError,
+    UnknownFrame,
+)
+from armfleet.messages import FloatArray, GripperCommand
+from armfleet.recording import RecordingError
+from armfleet.spec import SpecError, parse_spec
+from armfleet.time_step import MAX_DT_S, MIN_DT_S
+from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
+    BadInput,
+    Scene,
+    check_rejected,
+    scene,
+)
+
+#: issue #2's tracking figures: during a motion, and 0.2 s after it ended [rad].
+MAX_TRACKING_ERROR_RAD = 1e-3
+FINAL_ERROR_RAD = 1e-4
+SETTLE_S = 0.2
+ARMFLEET = (sys.executable, "-m", "armfleet.cli.main")
+
+
+def tool0(world: armfleet.World) -> FloatArray:
+    return world.tf.lookup("world", "bob_tool0")
+
+
+def nan_se3(world: armfleet.World, bob: armfleet.Arm) -> pin.SE3:
+    pose = tool0(world)
+    goal = pin.SE3(pose[:3, :3].copy(), pose[:3, 3].copy())
+    goal.translation = np.array([math.nan, 0.0, 0.5])
+    return goal
+
+
+def stretched_se3(world: armfleet.World, bob: armfleet.Arm) -> pin.SE3:
+    """bob's own tool pose with its rotation scaled by 1.5: not a rotation."""
+    pose = tool0(world)
+    return pin.SE3(1.5 * pose[:3, :3], pose[:3, 3].copy())
+
+
+def as_text(values: object) -> list[str]:
+    return [str(float(v)) for v in np.asarray(values).reshape(-1)]
+
+
+def write_mesh(name: str, text: str) -> str:
+    """A mesh file in the test's own folder (the test runs in ``tmp_path``)."""
+    Path(name).write_text(text)
+    return name
+
+
+def case(action: object, error: type[ArmfleetError], *expected: str, id: str) -> object:
+    return pytest.param(BadInput(action, error, lambda w, b: expected), id=id)  # type: ignore[arg-type]
+
+
+JOINTS = "one per joint: bob_panda_joint1"
+SPAWN_TOBY = {"name": "toby", "at": (1, 0)}
+
+CASES = [
+    # -- joint targets: move_to, move_together, IK seeds, initial positions ----------
+    case(
+        lambda w, b: b.move_to(as_text(b.positions)),
+        TargetTypeError, "bob: targets must be numbers", JOINTS,
+        id="move_to numeric strings -> TargetTypeError",
+    ),
+    case(
+        lambda w, b: b.move_to(np.asarray(b.positions, dtype=complex) + 1e-3j),
+        TargetTypeError, "bob: targets must be numbers", JOINTS,
+        id="move_to a complex array -> TargetTypeError, not its real part",
+    ),
+    case(
+        lambda w, b: b.move_to([False] * 7),
+        TargetTypeError, "bob: targets must be numbers", JOINTS,
+        id="move_to bools -> TargetTypeError",
+    ),
+    case(
+        lambda w, b: b.move_to(None),
+        TargetTypeError, "bob: targets must be numbers", JOINTS,
+        id="move_to None -> TargetTypeError",
+    ),
+    case(
+        lambda w, b: w.move_together({"bob": as_text(b.positions)}),
+        TargetTypeError, "bob: targets must be numbers", JOINTS,
+        id="move_together numeric strings -> TargetTypeError",
+    ),
+    case(
+        lambda w, b: w.move_together([("bob", b.positions)]),
+        ArmfleetError, "move_together takes a mapping {arm name: target}", "got list",
+        id="move_together a list -> ArmfleetError asking for a mapping",
+    ),
+    case(
+        lambda w, b: b.solve_ik(tool0(w), seed=as_text(b.positions)),
+        TargetTypeError, "bob: targets must be numbers", JOINTS,
+        id="solve_ik seed numeric strings -> TargetTypeError",
+    ),
+    case(
+        lambda w, b: w.spawn(**SPAWN_TOBY, initial_positions=as_text(b.positions)),
+        TargetTypeError, "toby: targets must be numbers", "toby_panda_joint1",
+        id="spawn initial_positions numeric strings -> TargetTypeError",
+    ),
+    # -- Cartesian goals ----------------------------------------------------------------
+    case(
+        lambda w, b: b.move_to_pose(stretched_se3(w, b)),
+        TargetPoseError, "must be a rotation (orthonormal, det +1)",
+        id="move_to_pose SE3 with a non-orthonormal rotation -> TargetPoseError",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(nan_se3(w, b), linear=True),
+        TargetPoseError, "finite",
+        id="move_to_pose NaN SE3 linear -> TargetPoseError, not ValueError",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(nan_se3(w, b)),
+        TargetPoseError, "finite",
+        id="move_to_pose NaN SE3 -> TargetPoseError, not an unreachable nan residual",
+    ),
+    case(
+        lambda w, b: b.move_to_pose([as_text(row) for row in tool0(w)]),
+        TargetPoseError, "4x4 homogeneous matrix of numbers",
+        id="move_to_pose matrix of numeric strings -> TargetPoseError",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(tool0(w), link=7),
+        UnknownFrame, "frame 7 not found", "links of bob:", "tool0",
+        id="move_to_pose link not a string -> UnknownFrame listing the links",
+    ),
+    # -- gripper --------------------------------------------------------------------------
+    case(
+        lambda w, b: b.gripper.move_to("0.04"),
+        InvalidNumber, "bob: gripper width = '0.04' is invalid", "[0, 0.08] m",
+        id="gripper width '0.04' -> InvalidNumber",
+    ),
+    case(
+        lambda w, b: b.gripper.move_to(None),
+        InvalidNumber, "bob: gripper width = None is invalid", "[0, 0.08] m",
+        id="gripper width None -> InvalidNumber, not TypeError",
+    ),
+    case(
+        lambda w, b: b.gripper.move_to(True),
+        InvalidNumber, "bob: gripper width = True is invalid",
+        id="gripper width a bool -> InvalidNumber",
+    ),
+    case(
+        lambda w, b: b.gripper.close("10"),
+        InvalidNumber, "bob: gripper force = '10' is invalid", "(0, ",
+        id="gripper force '10' -> InvalidNumber",
+    ),
+    # -- running, recording --------------------------------------------------------------
+    case(
+        lambda w, b: w.run("1"),
+        InvalidNumber, "duration = '1' is invalid", "a finite time >= 0 s",
+        id="run '1' -> InvalidNumber, not TypeError",
+    ),
+    case(
+        lambda w, b: w.run(True),
+        InvalidNumber, "duration = True is invalid",
+        id="run True -> InvalidNumber, not one second of simulation",
+    ),
+    case(
+        lambda w, b: w.run(None),
+        InvalidNumber, "duration = None is invalid",
+        id="run None -> InvalidNumber, not TypeError",
+    ),
+    case(
+        lambda w, b: w.record(5),
+        RecordingError, "recording 5", ".mcap",
+        id="record to a path that is a number -> RecordingError, not TypeError",
+    ),
+    case(
+        lambda w, b: w.record("run.mcap", topics="/bob/*"),
+        RecordingError, "topics='/bob/*' must be a list",
+        id="record topics as one string -> RecordingError, not one pattern per letter",
+    ),
+    # -- spawn ------------------------------------------------------------------------------
+    case(
+        lambda w, b: w.spawn("toby", at=None),
+        PoseError, "spawn pose None must be (x, y[, z[, yaw_deg]]) of numbers",
+        id="spawn at None -> PoseError, not TypeError",
+    ),
+    case(
+        lambda w, b: w.spawn("toby", at=("1", "0")),
+        PoseError, "spawn pose ('1', '0') must be (x, y[, z[, yaw_deg]]) of numbers",
+        id="spawn at numeric strings -> PoseError",
+    ),
+    case(
+        lambda w, b: w.spawn("toby", at=(True, False)),
+        PoseError, "of numbers",
+        id="spawn at bools -> PoseError",
+    ),
+    case(
+        lambda w, b: w.spawn(**SPAWN_TOBY, parameter_files="position_controller.yaml"),
+        ParameterError, "parameter_files must be a mapping", "got str", "position_controller",
+        id="spawn parameter_files a string path -> ParameterError asking for a mapping",
+    ),
+    case(
+        lambda w, b: w.spawn(**SPAWN_TOBY, parameter_files={"position_controller": 5}),
+        ParameterError, "parameter_files['position_controller'] must be the path", "got int 5",
+        id="spawn parameter_files path not a path -> ParameterError, not AttributeError",
+    ),
+    case(
+        lambda w, b: w.spawn(**SPAWN_TOBY, parameters="kp_s2=900"),
+        ParameterError, "parameters must be a mapping", "got str",
+        id="spawn parameters a string -> ParameterError asking for a mapping",
+    ),
+    # -- objects ------------------------------------------------------------------------------
+    case(
+        lambda w, b: w.add_object("crate", "box", size=("0.1", 0.1, 0.1), at=(2, 2, 0.05)),
+        ObjectError, "object 'crate': size:", "is not numbers",
+        id="add_object size numeric strings -> ObjectError",
+    ),
+    case(
+        lambda w, b: w.add_object("crate", "box", size=(0.1, 0.1, 0.1), at=("2", 2, 0.05)),
+        ObjectError, "object 'crate': at: expected 3 numbers",
+        id="add_object at numeric strings -> ObjectError",
+    ),
+    case(
+        lambda w, b: w.add_object("blob", "mesh", mesh=5, at=(2, 2, 0.5)),
+        ObjectError, "object 'blob': mesh: 5 is not a path", ".obj/.stl",
+        id="add_object mesh path a number -> ObjectError, not TypeError",
+    ),
+    case(
+        lambda w, b: w.add_object(
+            "blob", "mesh", mesh=write_mesh("point.obj", "v 0 0 0\n"), at=(2, 2, 0.5)
+        ),
+        ObjectError, "object 'blob': mesh:", "no face with an area",
+        id="add_object mesh of a single vertex -> ObjectError, not pybullet.error",
+    ),
+    case(
+        lambda w, b: w.add_object(
+            "blob", "mesh", mesh=write_mesh("dot.obj", "v 0 0 0\nf 1 1 1\n"), at=(2, 2, 0.5)
+        ),
+        ObjectError, "object 'blob': mesh:", "no face with an area",
+        id="add_object mesh whose only face is a point -> ObjectError, not a 0 m object",
+    ),
+    case(
+        lambda w, b: w.add_object(
+            "blob",
+            "mesh",
+            mesh=write_mesh("plate.obj", "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nf 1 2 3\n"),
+            at=(2, 2, 0.5),
+        ),
+        ObjectError, "object 'blob': mesh: plate.obj is flat", "mass=0",
+        id="add_object flat mesh that would move -> ObjectError naming mass=0",
+    ),
+]  # fmt: skip
+
+
+@pytest.fixture(autouse=True)
+def in_tmp_path(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Mesh files and recordings a case writes go to the test's own folder."""
+    monkeypatch.chdir(tmp_path)
+
+
+@pytest.mark.parametrize("bad", CASES)
+def test_bad_types_are_refused_in_one_line_and_the_world_untouched(
+    scene: Scene,  # noqa: F811
+    bad: BadInput,
+) -> None:
+    gripper_commands: list[GripperCommand] = []
+    scene.world.bus.subscribe("/bob/gripper_controller/commands", gripper_commands.append)
+    objects, width = list(scene.world.objects), scene.bob.gripper.width
+    check_rejected(scene, bad)
+    assert gripper_commands == []
+    assert list(scene.world.objects) == objects
+    assert not list(Path().glob("*.mcap"))  # a refused recording leaves no file
+    # The fingers did not move either (they hold their width within 0.1 mm).
+    assert abs(scene.bob.gripper.width - width) < 1e-4
+
+
+@pytest.mark.parametrize(
+    ("arguments", "expected"),
+    [
+        pytest.param({"dt": "0.001"}, "dt = '0.001' is invalid", id="dt '0.001' -> InvalidNumber"),
+        pytest.param({"dt": True}, "dt = True is invalid", id="dt True -> InvalidNumber"),
+        pytest.param(
+            {"dt": 1e-9}, "dt = 1e-09 is invalid", id="dt 1e-9, below 1e-5 s -> InvalidNumber"
+        ),
+        pytest.param(
+            {"dt": 0.1}, "dt = 0.1 is invalid", id="dt 0.1, too coarse to track -> InvalidNumber"
+        ),
+        pytest.param({"dt": math.nan}, "dt = nan is invalid", id="dt nan -> InvalidNumber"),
+        pytest.param(
+            {"gravity": "9.81"}, "gravity = '9.81' is invalid", id="gravity '9.81' -> InvalidNumber"
+        ),
+    ],
+)
+def test_bad_world_settings_are_refused_before_any_world_exists(
+    arguments: dict[str, object], expected: str
+) -> None:
+    with pytest.raises(InvalidNumber) as caught:
+        armfleet.World(**arguments)  # type: ignore[arg-type]
+    message = str(caught.value)
+    assert "\n" not in message
+    assert expected in message
+    valid = "[-100, 100] m/s^2" if "gravity" in arguments else f"[1e-05, {MAX_DT_S:g}] s"
+    assert valid in message
+
+
+def spec_with_dt(dt: float) -> str:
+    # Fixed-point: PyYAML reads "1e-05" (no dot) as text.
+    return f"world:\n  dt_s: {dt:.7f}\narms:\n  - name: bob\n    model: panda\n"
+
+
+def test_world_and_spec_take_the_same_steps() -> None:
+    """One range: the bounds are valid for both, just outside them neither."""
+    for dt in (MIN_DT_S, MAX_DT_S):
+        assert parse_spec(spec_with_dt(dt), "inline").world.dt_s == dt
+        with armfleet.World(dt=dt) as world:
+            assert world.dt == dt
+    for dt in (MIN_DT_S * 0.9, MAX_DT_S * 1.1):
+        with pytest.raises(SpecError, match=r"world\.dt_s: .* outside \[1e-05, 0\.002\]"):
+            parse_spec(spec_with_dt(dt), "inline")
+        with pytest.raises(InvalidNumber, match=r"dt = .* give a step in \[1e-05, 0\.002\] s"):
+            armfleet.World(dt=dt)
+
+
+def test_cli_launch_check_refuses_a_coarse_dt(tmp_path: Path) -> None:
+    spec = tmp_path / "coarse.yaml"
+    spec.write_text(spec_with_dt(0.005))
+    env = {**os.environ, "XDG_RUNTIME_DIR": str(tmp_path)}
+    done = subprocess.run(
+        [*ARMFLEET, "launch", str(spec), "--check"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr
+    assert "coarse.yaml:2: world.dt_s: 0.005 is outside [1e-05, 0.002] [s]" in lines[0]
+
+
+@pytest.mark.parametrize("model", ModelLibrary().names)
+def test_every_shipped_model_tracks_at_the_largest_dt(model: str) -> None:
+    """At MAX_DT_S a model brings up, follows a +0.3 rad move of every joint within issue
+    #2's 1e-3 rad and settles within 1e-4 rad of its target 0.2 s after the motion.
+
+    (Measured when the bound was set: a Panda at 2.2 ms settles 2e-4 rad off target, and
+    from 4.6 ms does not bring up.)
+    """
+    with armfleet.World(dt=MAX_DT_S) as world:
+        arm = world.spawn("bob", model=model)
+        lower, upper = arm.joint_limits
+        target = np.clip(arm.positions + 0.3, lower + 0.05, upper - 0.05)
+        arm.move_to(target)
+        worst, deadline = 0.0, world.time + 10.0
+        while arm.is_moving and world.time < deadline:
+            world.step()
+            trajectory = arm.position_controller.trajectory
+            assert trajectory is not None
+            worst = max(worst, float(np.abs(trajectory.position - arm.positions).max()))
+        assert not arm.is_moving
+        world.run(SETTLE_S)
+        assert worst < MAX_TRACKING_ERROR_RAD
+        assert np.abs(arm.positions - target).max() < FINAL_ERROR_RAD
