@@ -13,10 +13,11 @@ PyBullet integrates with semi-implicit Euler: ``v1 = v0 + dt a(q0, v0, tau)`` th
 so the velocity change of one step is exactly ``dt`` times the acceleration at the
 start of the step.
 
-Tolerance: 1e-5 rad/s^2 (or m/s^2 for the fingers). Measured 2026-11-23 at
-accelerations of up to ~3e4 rad/s^2: worst 3e-6 on the Panda (whose inertias PyBullet
-re-expresses in principal axes), 1e-12 on the URs. Bullet's default link damping
-(0.04, on until armfleet turns it off) made 0.53 rad/s^2 on the Panda.
+Tolerance: 1e-5 rad/s^2 (or m/s^2 for the fingers). Measured 2026-11-23 here:
+xarm7 1.1e-6 (at accelerations up to 5e4), Panda 3.4e-7 (2e3; 3e-6 seen with torques
+up to half the limits), z1 4e-8, URs 4e-12: rounding, largest where PyBullet
+re-expresses inertias in principal axes. Bullet's default link damping (0.04, on until
+armfleet turned it off) made 0.27 to 0.51 rad/s^2 here.
 """
 
 from __future__ import annotations
