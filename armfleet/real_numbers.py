@@ -63,14 +63,17 @@ def real_number(
     *,
     low: float = -math.inf,
     high: float = math.inf,
+    finite: bool = True,
 ) -> float:
     """``value`` as a float if it is a finite real number in ``[low, high]``.
 
     Args:
         value: what the user gave.
         argument: its name in the message (``"dt"``, ``"bob: gripper width"``).
-        valid: what would be right, with its unit (``"a step in [1e-05, 0.004] s"``).
+        valid: what would be right, with its unit (``"a step in [1e-05, 0.002] s"``).
         low, high: inclusive bounds.
+        finite: check finiteness and bounds; with False only the type is checked,
+            for callers that name a value out of range in their own error.
 
     Raises:
         InvalidNumber: naming ``argument``, the value and ``valid``.
@@ -78,7 +81,7 @@ def real_number(
     if not is_real(value):
         raise InvalidNumber(argument, value, valid)
     number = float(value)  # type: ignore[arg-type]  # is_real checked it
-    if not (math.isfinite(number) and low <= number <= high):
+    if finite and not (math.isfinite(number) and low <= number <= high):
         raise InvalidNumber(argument, number, valid)
     return number
 
