@@ -90,19 +90,19 @@ def start_contacts(
     solid = set(solid_links(client, body))
     found: list[StartContact] = []
     ignored = ignored_self_pairs(client, body, ignored_pairs)
-    for point in _closest(client, body.body_id, body.body_id, clearance_m):
-        a, b = point[3], point[4]
+    for a, b, distance in _closest(client, body.body_id, body.body_id, clearance_m):
         if a < b and a in solid and b in solid and (a, b) not in ignored:
-            found.append(StartContact(names[a], name, names[b], point[8]))
+            found.append(StartContact(names[a], name, names[b], distance))
     resting = fixed_links(body)
     for other in neighbours:
         if other.body_id == body.body_id:
             continue
-        for point in _closest(client, body.body_id, other.body_id, clearance_m):
-            if point[3] in resting and other.supports:
+        for a, b, distance in _closest(client, body.body_id, other.body_id, clearance_m):
+            if a in resting and other.supports:
                 continue
-            link = names.get(point[3], "")
-            found.append(StartContact(link, other.name, other.links.get(point[4], ""), point[8]))
+            found.append(
+                StartContact(names.get(a, ""), other.name, other.links.get(b, ""), distance)
+            )
     return sorted(found, key=lambda contact: contact.distance_m)
 
 
@@ -152,6 +152,10 @@ def load_clear_body(
     return body
 
 
-def _closest(client: int, first: int, second: int, distance_m: float) -> list[tuple[float, ...]]:
+def _closest(
+    client: int, first: int, second: int, distance_m: float
+) -> list[tuple[int, int, float]]:
+    """(link of ``first``, link of ``second``, signed distance [m]) of each pair closer
+    than ``distance_m``."""
     points = p.getClosestPoints(first, second, distance_m, physicsClientId=client)
-    return list(points or ())
+    return [(int(point[3]), int(point[4]), float(point[8])) for point in points or ()]

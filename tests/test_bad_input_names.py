@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import subprocess
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +62,9 @@ class NewObject:
     size: tuple[float, float, float] = (0.1, 0.1, 0.1)
 
 
+SURFACES = frozenset({"python", "cli", "spec", "live"})
+
+
 @dataclass(frozen=True)
 class Bad:
     """What is tried, the error the world raises and what its one line must say.
@@ -74,10 +77,9 @@ class Bad:
     error: type[ArmfleetError]
     says: str
     spec_says: str | None = None
-    surfaces: frozenset[str] = field(default_factory=lambda: frozenset(SURFACES))
+    surfaces: frozenset[str] = SURFACES
 
 
-SURFACES = ("python", "cli", "spec", "live")
 LONG = "a" * (MAX_NAME_LENGTH + 1)
 HUGE = "b" * 1300  # PyBullet's URDF loader segfaulted from about 1,255
 
@@ -157,8 +159,8 @@ def scene() -> Iterator[armfleet.World]:
     with armfleet.World() as world:
         for name, at in ARMS:
             world.spawn(name, at=at)
-        for name, size, at in OBJECTS:
-            world.add_object(name, "box", size=size, mass=0.0, at=at)
+        for name, size, centre in OBJECTS:
+            world.add_object(name, "box", size=size, mass=0.0, at=centre)
         yield world
 
 
@@ -196,8 +198,8 @@ class Running:
 @pytest.fixture(scope="module")
 def running(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Running]:
     runtime = tmp_path_factory.mktemp("runtime")
-    names, poses = zip(*ARMS, strict=True)
-    at = [f"{x:g},{y:g}" for x, y in poses]
+    names = [name for name, _ in ARMS]
+    at = [f"{x:g},{y:g}" for _, (x, y) in ARMS]
     with WorldProcess(runtime, *names, "--at", *at, "--no-viewer") as world:
         with armfleet.connect(world.address) as client:
             for name, size, centre in OBJECTS:
