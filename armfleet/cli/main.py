@@ -18,6 +18,7 @@ from armfleet.cli import (
     object_commands,
     plot_command,
     recording_info_command,
+    recover_command,
     remove_command,
     replay_command,
     reset_command,
@@ -53,6 +54,7 @@ def build_parser() -> OneLineParser:
     recording_info_command.extend_info_parser(subparsers.choices["info"])
     plot_command.add_parser(subparsers)
     replay_command.add_parser(subparsers)
+    recover_command.add_parser(subparsers)
     parser.commands = tuple(subparsers.choices)
     return parser
 

@@ -42,7 +42,9 @@ def describe(recording: Recording) -> str:
     state = (
         "complete"
         if recording.complete
-        else "INCOMPLETE: the recorder did not finish (killed?); read up to its last chunk"
+        else "INCOMPLETE: the recorder did not finish (killed?) and the file has no index; "
+        f"read up to its last whole record; 'armfleet recover {recording.path}' writes a "
+        "complete copy that every MCAP reader can open"
     )
     run = recording.run
     lines = [f"file:        {recording.path} ({size_mb:.2f} MB, {state})"]

@@ -8,6 +8,7 @@
 
 from armfleet.recording.arm_record import ArmRecord
 from armfleet.recording.errors import (
+    DamagedRecording,
     NotARecording,
     RecordingError,
     RecordingNotFound,
@@ -16,17 +17,20 @@ from armfleet.recording.errors import (
 from armfleet.recording.plot import plot_recording
 from armfleet.recording.reader import RecordedMessage, Recording, TopicInfo, open_recording
 from armfleet.recording.recorder import Recorder, record
+from armfleet.recording.recover import Recovery, recover
 from armfleet.recording.replay import ReplayPlayer, export_html
 from armfleet.recording.replay_stream import replay_events
 
 __all__ = [
     "ArmRecord",
+    "DamagedRecording",
     "NotARecording",
     "RecordedMessage",
     "Recorder",
     "Recording",
     "RecordingError",
     "RecordingNotFound",
+    "Recovery",
     "ReplayPlayer",
     "TopicInfo",
     "UnknownRecordedArm",
@@ -34,5 +38,6 @@ __all__ = [
     "open_recording",
     "plot_recording",
     "record",
+    "recover",
     "replay_events",
 ]

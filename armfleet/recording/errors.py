@@ -32,3 +32,24 @@ class UnknownRecordedArm(RecordingError):
         self.arms = tuple(arms)
         listed = ", ".join(sorted(arms)) or "(none)"
         super().__init__(f"{path} has no arm named {name!r}{what}; arms: {listed}")
+
+
+class DamagedRecording(RecordingError):
+    """An MCAP file whose records break off in something no MCAP writer writes.
+
+    Attributes:
+        path: the file.
+        reason: what is wrong and where, e.g. ``a record of unknown type 0x5c at byte 31``.
+        messages_before: whole messages before the damage (what ``armfleet recover`` keeps).
+    """
+
+    def __init__(self, path: Path, reason: str, messages_before: int) -> None:
+        self.path = path
+        self.reason = reason
+        self.messages_before = messages_before
+        rescue = (
+            f"'armfleet recover {path}' saves the {messages_before} messages before it"
+            if messages_before
+            else "no message precedes it"
+        )
+        super().__init__(f"{path} is damaged: {reason}; {rescue}")

@@ -2,14 +2,16 @@
 
 A complete file is read through its summary (index and statistics). A file
 whose writer died (a crash, ``kill -9``) has no summary: it is then scanned from
-the start, and everything up to the last complete chunk is there;
-:attr:`Recording.complete` tells which.
+the start, and everything up to the last whole record is there;
+:attr:`Recording.complete` tells which (``armfleet recover`` writes a complete
+copy). A file broken in any other way (random bytes, a bad chunk) is refused with
+:class:`DamagedRecording` rather than read as far as it happens to go; see
+:mod:`armfleet.recording.record_scan` for the line between the two.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import io
 import json
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -18,7 +20,6 @@ from typing import Any
 
 from mcap.reader import SeekingReader
 from mcap.records import Attachment, Channel, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
 from mcap.summary import Summary
 from mcap.well_known import MessageEncoding
 
@@ -30,14 +31,15 @@ from armfleet.recording.arm_record import (
     arm_record,
 )
 from armfleet.recording.errors import (
+    DamagedRecording,
     NotARecording,
     RecordingError,
     RecordingNotFound,
     UnknownRecordedArm,
 )
+from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan, ScanResult
 from armfleet.recording.recorder import SPEC_ATTACHMENT
 
-MCAP_MAGIC = b"\x89MCAP0\r\n"
 NS_PER_S = 1e9
 
 
@@ -166,20 +168,28 @@ class Recording:
     def raw_messages(self, topics: Iterable[str] | None = None) -> Iterator[tuple[str, int, bytes]]:
         """``(topic, log time [ns], encoded message)`` in log-time order, undecoded."""
         wanted = None if topics is None else set(topics)
-        with self.path.open("rb") as stream:
-            if self._summary is not None:
+        if self._summary is not None:
+            with self.path.open("rb") as stream:
                 reader = SeekingReader(stream)
-                for _, channel, message in reader.iter_messages(topics=wanted):
-                    yield channel.topic, message.log_time, message.data
-                return
-            channels: dict[int, Channel] = {}
-            for record in _records(stream):
-                if isinstance(record, Channel):
-                    channels[record.id] = record
-                elif isinstance(record, Message):
-                    topic = channels[record.channel_id].topic
-                    if wanted is None or topic in wanted:
-                        yield topic, record.log_time, record.data
+                try:
+                    for _, channel, message in reader.iter_messages(topics=wanted):
+                        yield channel.topic, message.log_time, message.data
+                except Exception as exc:  # a chunk the summary points at cannot be read
+                    reason = f"a chunk cannot be read ({type(exc).__name__}: {exc})"
+                    raise DamagedRecording(self.path, reason, 0) from None
+            return
+        channels: dict[int, Channel] = {}
+        for record in RecordScan(self.path):
+            if isinstance(record, Channel):
+                channels[record.id] = record
+            elif isinstance(record, Message):
+                defined = channels.get(record.channel_id)
+                if defined is None:
+                    raise DamagedRecording(
+                        self.path, f"a message on channel {record.channel_id}, never defined", 0
+                    )
+                if wanted is None or defined.topic in wanted:
+                    yield defined.topic, record.log_time, record.data
 
     def messages(self, topics: Iterable[str] | None = None) -> Iterator[RecordedMessage]:
         """The messages of ``topics`` (all if None), decoded, in log-time order.
@@ -237,26 +247,26 @@ class Recording:
 
     def _scan(self) -> _Contents:
         contents = _Contents({}, {}, {}, None, None, [], [])
-        with self.path.open("rb") as stream:
-            scan = _records(stream)
-            for record in scan:
-                if isinstance(record, Message):
-                    contents.counts[record.channel_id] = (
-                        contents.counts.get(record.channel_id, 0) + 1
-                    )
-                    time = record.log_time
-                    if contents.start_ns is None or time < contents.start_ns:
-                        contents.start_ns = time
-                    if contents.end_ns is None or time > contents.end_ns:
-                        contents.end_ns = time
-                elif isinstance(record, Schema):
-                    contents.schemas[record.id] = record
-                elif isinstance(record, Channel):
-                    contents.channels[record.id] = record
-                elif isinstance(record, Attachment):
-                    contents.attachments.append(record)
-                elif isinstance(record, Metadata):
-                    contents.metadata.append(record)
+        scan = RecordScan(self.path)
+        for record in scan:
+            if isinstance(record, Message):
+                contents.counts[record.channel_id] = contents.counts.get(record.channel_id, 0) + 1
+                time = record.log_time
+                if contents.start_ns is None or time < contents.start_ns:
+                    contents.start_ns = time
+                if contents.end_ns is None or time > contents.end_ns:
+                    contents.end_ns = time
+            elif isinstance(record, Schema):
+                contents.schemas[record.id] = record
+            elif isinstance(record, Channel):
+                contents.channels[record.id] = record
+            elif isinstance(record, Attachment):
+                contents.attachments.append(record)
+            elif isinstance(record, Metadata):
+                contents.metadata.append(record)
+        result = scan.result
+        assert result is not None  # the scan has ended
+        _refuse_damage(self.path, result)
         self.truncated = True
         return contents
 
@@ -284,17 +294,12 @@ def _check_magic(path: Path) -> None:
         raise NotARecording(path, "it does not start with the MCAP magic bytes")
 
 
-def _records(stream: io.BufferedReader) -> Iterator[Any]:
-    """Every record from the start; a damaged or cut tail ends the scan quietly."""
-    records = StreamReader(stream, skip_magic=False).records
-    while True:
-        try:
-            record = next(records)
-        except StopIteration:
-            return
-        except Exception:  # EndOfFile, a cut chunk, bad compression: the writer died here
-            return
-        yield record
+def _refuse_damage(path: Path, result: ScanResult) -> None:
+    """Raise DamagedRecording unless the scan ended as a killed writer's file ends."""
+    if result.end is FileEnd.DAMAGED:
+        raise DamagedRecording(path, result.reason, result.message_count)
+    if not result.has_header:
+        raise DamagedRecording(path, "it ends before its first record (the Header)", 0)
 
 
 def _last_metadata(metadata: list[Metadata], name: str) -> dict[str, str]:
