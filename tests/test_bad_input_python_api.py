@@ -19,6 +19,7 @@ import math
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +38,10 @@ from armfleet.errors import (
     TargetTypeError,
     UnknownFrame,
 )
-from armfleet.messages import FloatArray, GripperCommand
+from armfleet.messages import ArmMode, FloatArray, GripperCommand
 from armfleet.recording import RecordingError
+from armfleet.remote import RemoteError
+from armfleet.remote.remote_arm import RemoteArm
 from armfleet.spec import SpecError, parse_spec
 from armfleet.time_step import MAX_DT_S, MIN_DT_S
 from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
@@ -47,6 +50,7 @@ from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
     check_rejected,
     scene,
 )
+from tests.test_remote_python_server import Served, served  # noqa: F401  (served: a fixture)
 
 #: issue #2's tracking figures: during a motion, and 0.2 s after it ended [rad].
 MAX_TRACKING_ERROR_RAD = 1e-3
@@ -387,3 +391,69 @@ def test_every_shipped_model_tracks_at_the_largest_dt(model: str) -> None:
         world.run(SETTLE_S)
         assert worst < MAX_TRACKING_ERROR_RAD
         assert np.abs(arm.positions - target).max() < FINAL_ERROR_RAD
+
+
+# -- the same through the live-API client ---------------------------------------------------
+RemoteUse = Callable[[RemoteArm], object]
+
+REMOTE_CASES = [
+    pytest.param(
+        lambda b: b.move_to(as_text(b.positions)), ArmfleetError, "bob: targets must be numbers",
+        id="remote move_to numeric strings -> refused before sending",
+    ),
+    pytest.param(
+        lambda b: b.move_to([False] * 7), ArmfleetError, "bob: targets must be numbers",
+        id="remote move_to bools -> refused before sending",
+    ),
+    pytest.param(
+        lambda b: b.move_to_pose([["1"] * 4] * 4), ArmfleetError, "a pose must be a 4x4 matrix",
+        id="remote move_to_pose matrix of strings -> refused before sending",
+    ),
+    pytest.param(
+        lambda b: b.gripper.move_to("0.04"), InvalidNumber,
+        "bob: gripper width = '0.04' is invalid",
+        id="remote gripper width '0.04' -> InvalidNumber before sending",
+    ),
+    pytest.param(
+        lambda b: b.gripper.move_to(None), InvalidNumber, "bob: gripper width = None is invalid",
+        id="remote gripper width None -> InvalidNumber, not TypeError",
+    ),
+    pytest.param(
+        lambda b: b.gripper.close("10"), InvalidNumber, "bob: gripper force = '10' is invalid",
+        id="remote gripper force '10' -> InvalidNumber before sending",
+    ),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("use", "error", "expected"), REMOTE_CASES)
+def test_the_live_api_client_refuses_the_same_types(
+    served: Served,  # noqa: F811
+    use: RemoteUse,
+    error: type[ArmfleetError],
+    expected: str,
+) -> None:
+    world = served.world
+    sent: list[object] = []
+    world.bus.subscribe("/bob/position_controller/commands", sent.append)
+    world.bus.subscribe("/bob/gripper_controller/commands", sent.append)
+    served.step_in_background()
+    with armfleet.connect(served.server.address) as client:
+        bob = client.arm("bob")
+        with pytest.raises(error) as caught:
+            use(bob)
+        assert type(caught.value) is error
+        assert expected in str(caught.value) and "\n" not in str(caught.value)
+        assert bob.mode is ArmMode.HOLDING  # the world answers, bob holds
+    assert sent == []
+
+
+def test_the_live_api_client_still_takes_a_pin_se3(served: Served) -> None:  # noqa: F811
+    """A pin.SE3 goal goes to the world as its matrix and is checked there: a stretched
+    rotation is refused in the world's words, bob's own tool pose is taken."""
+    served.step_in_background()
+    pose = served.world.submit(lambda: tool0(served.world)).result(timeout=30)
+    with armfleet.connect(served.server.address) as client:
+        bob = client.arm("bob")
+        with pytest.raises(RemoteError, match=r"must be a rotation \(orthonormal, det \+1\)"):
+            bob.move_to_pose(pin.SE3(1.5 * pose[:3, :3], pose[:3, 3].copy()))
+        assert bob.move_to_pose(pin.SE3(pose[:3, :3].copy(), pose[:3, 3].copy())) >= 0.0
