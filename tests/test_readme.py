@@ -216,6 +216,22 @@ def test_every_relative_link_reaches_a_file_and_heading(path: Path) -> None:
             assert anchor in anchors, f"{path.name}: {link}: no such heading in {target}"
 
 
+#: A repository path named in the text, e.g. `benchmarks/fleet.py` or launch_specs/handover.yaml.
+REPO_PATH = re.compile(
+    r"\b((?:armfleet|benchmarks|examples|controllers|launch_specs|tests|scripts|description)"
+    r"/[\w/-]+\.(?:py|yaml|sh|xacro))\b"
+)
+
+
+@pytest.mark.parametrize(
+    "path", markdown_files(), ids=lambda path: path.relative_to(ROOT).as_posix()
+)
+def test_every_repository_file_named_exists(path: Path) -> None:
+    named = set(REPO_PATH.findall(path.read_text()))
+    missing = sorted(name for name in named if not (ROOT / name).is_file())
+    assert not missing, f"{path.name} names files that are not in the repository: {missing}"
+
+
 def pages_with_examples() -> list[str]:
     return [
         page
