@@ -94,6 +94,11 @@ class World:
         p.setTimeStep(dt, physicsClientId=self._client)
         p.setGravity(0.0, 0.0, -gravity, physicsClientId=self._client)
         self._ground = create_ground(self._client)
+        if models is not None and not isinstance(models, ModelLibrary):
+            raise ArmfleetError(
+                f"models must be an armfleet.description.ModelLibrary (or None for the "
+                f"shipped models), got {type(models).__name__}"
+            )
         self._models = models or ModelLibrary()
         self._bus = Bus()
         self._bus.advertise(BRINGUP_TOPIC, BringupEvent)
@@ -162,6 +167,10 @@ class World:
         moving, removing, reading, all happen between two steps, in order.
         """
         self._check_open()
+        if not callable(function):
+            raise ArmfleetError(
+                f"submit takes a function of no arguments, got {type(function).__name__}"
+            )
         return self._requests.submit(function)
 
     def record(

@@ -208,6 +208,16 @@ CASES = [
         RecordingError, "topics='/bob/*' must be a list",
         id="record topics as one string -> RecordingError, not one pattern per letter",
     ),
+    case(
+        lambda w, b: w.record("run.mcap", spec="bob_and_toby"),
+        RecordingError, "spec must be an armfleet.FleetSpec", "got str",
+        id="record spec a name, not a FleetSpec -> RecordingError, not AttributeError",
+    ),
+    case(
+        lambda w, b: w.submit(5),
+        ArmfleetError, "submit takes a function of no arguments, got int",
+        id="submit a non-function -> ArmfleetError, not TypeError from the stepping thread",
+    ),
     # -- spawn ------------------------------------------------------------------------------
     case(
         lambda w, b: w.spawn("toby", at=None),
@@ -331,6 +341,13 @@ def test_bad_world_settings_are_refused_before_any_world_exists(
     assert expected in message
     valid = "[-100, 100] m/s^2" if "gravity" in arguments else f"[1e-05, {MAX_DT_S:g}] s"
     assert valid in message
+
+
+def test_a_model_library_that_is_not_one_is_refused() -> None:
+    with pytest.raises(
+        ArmfleetError, match=r"models must be an armfleet\.description\.ModelLibrary"
+    ):
+        armfleet.World(models="description/")  # type: ignore[arg-type]
 
 
 def spec_with_dt(dt: float) -> str:

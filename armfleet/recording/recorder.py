@@ -109,6 +109,13 @@ class Recorder:
             raise RecordingError(f"recording {self._path}: name an MCAP file ending in {SUFFIX}")
         self._world = world
         self._spec = spec
+        from armfleet.spec import FleetSpec  # imported for typing only at module level
+
+        if spec is not None and not isinstance(spec, FleetSpec):
+            raise RecordingError(
+                f"recording {self._path}: spec must be an armfleet.FleetSpec (e.g. from "
+                f"armfleet.load_spec), got {type(spec).__name__}"
+            )
         if isinstance(topics, str | bytes):
             raise RecordingError(
                 f"recording {self._path}: topics={topics!r} must be a list of topics or "
