@@ -27,6 +27,7 @@ DOCS = ROOT / "docs"
 #: The topic pages issue #14 asks for, besides the index docs/README.md.
 PAGES = (
     "live-api.md",
+    "cli.md",
     "manipulation.md",
     "recording.md",
     "safety.md",
