@@ -19,6 +19,9 @@ from collections.abc import Collection
 from armfleet.errors import DuplicateArmName, InvalidArmName
 
 ARM_NAME_PATTERN = r"^[a-z][a-z0-9_]*$"
+#: Names no arm or object may take: the root frame, and the floor's body name on
+#: ``/collisions`` (an arm called ``ground`` would take the floor's contacts as its own).
+RESERVED_NAMES = ("ground", "world")
 #: Longest name of an arm or object [characters].
 MAX_NAME_LENGTH = 64
 _ARM_NAME = re.compile(ARM_NAME_PATTERN)
@@ -44,12 +47,15 @@ def check_arm_name(name: object, existing: Collection[str] = ()) -> str:
     """Return ``name`` if it is a well-formed name not in ``existing``; raise otherwise.
 
     Raises:
-        InvalidArmName: malformed, too long, or ``"world"``.
+        InvalidArmName: malformed, too long, or one of :data:`RESERVED_NAMES`.
         DuplicateArmName: already in ``existing``.
     """
     problem = name_problem(name)
-    if problem is None and name == "world":
-        problem = f"is reserved (the root frame); a name must match {ARM_NAME_PATTERN} and differ"
+    if problem is None and name in RESERVED_NAMES:
+        problem = (
+            f"is reserved; a name must match {ARM_NAME_PATTERN} and not be "
+            f"{' or '.join(RESERVED_NAMES)}"
+        )
     if problem is not None:
         raise InvalidArmName(name, problem)
     assert isinstance(name, str)  # name_problem checked it

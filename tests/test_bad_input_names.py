@@ -93,6 +93,10 @@ CASES = [
         id="arm name of 1300 characters (used to segfault) -> InvalidArmName, process lives",
     ),
     pytest.param(
+        Bad(NewArm("ground", (6.0, 0.0)), InvalidArmName, "'ground' is reserved"),
+        id="arm named ground (the floor on /collisions) -> InvalidArmName, reserved",
+    ),
+    pytest.param(
         Bad(NewObject(LONG, (6.0, 6.0, 0.05)), ObjectError, "name: is too long (65 characters)"),
         id="object name of 65 characters -> ObjectError naming the 64 limit",
     ),

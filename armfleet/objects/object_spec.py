@@ -19,12 +19,10 @@ import numpy as np
 
 from armfleet.errors import ObjectError
 from armfleet.messages import FloatArray
-from armfleet.names import name_problem
+from armfleet.names import RESERVED_NAMES, name_problem
 from armfleet.objects.mesh_file import MESH_SUFFIXES, mesh_extents
 from armfleet.real_numbers import is_real, is_real_vector
 
-#: Names no object may take: the root frame and the floor's body name on ``/collisions``.
-RESERVED_NAMES = ("ground", "world")
 #: Lateral (Coulomb) friction coefficient of an object unless given.
 DEFAULT_FRICTION = 0.8
 #: Torsional friction [m]: resists spinning about the contact normal, so a box held
