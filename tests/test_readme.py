@@ -233,6 +233,17 @@ def test_every_repository_file_named_exists(path: Path) -> None:
     assert not missing, f"{path.name} names files that are not in the repository: {missing}"
 
 
+def test_the_launch_spec_example_passes_check(tmp_path: Path) -> None:
+    (spec,) = code_blocks(DOCS / "descriptions-and-specs.md", "yaml")
+    path = tmp_path / "example.yaml"
+    path.write_text(spec)
+    done = subprocess.run(
+        [*ARMFLEET, "launch", str(path), "--check"], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert f"{path}: ok: 31 arm(s) (panda)" in done.stdout  # bob and the 5 x 6 grid
+
+
 def pages_with_examples() -> list[str]:
     return [
         page
