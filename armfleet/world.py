@@ -492,12 +492,13 @@ class World:
         """Disconnect the physics engine; the world can no longer be used, nor any
         handle of it (arms, grippers, ``tf``, objects raise :class:`WorldClosed`)."""
         if self._lifetime.alive:
-            self._lifetime.end()
-            self._requests.cancel_all(WorldClosed())
             try:
+                # First, while the handles still work: its refresher thread reads them.
                 if self._viewer is not None:
                     self._viewer.close()
             finally:
+                self._lifetime.end()
+                self._requests.cancel_all(WorldClosed())
                 p.disconnect(physicsClientId=self._client)
 
     def __enter__(self) -> World:
