@@ -19,6 +19,8 @@ import pytest
 import armfleet
 from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
 from armfleet.messages import GripperCommand, JointCommand
+from armfleet.remote import RemoteError
+from tests.test_remote_python_server import Served, served  # noqa: F401  (served: a fixture)
 
 #: A settled arm's joints drift less than this over 0.2 s [rad] (test_bad_input's figure).
 HOLD_DRIFT_RAD = 1e-4
@@ -202,3 +204,25 @@ def test_a_closed_world_is_named_before_a_removed_arm() -> None:
     with pytest.raises(WorldClosed):
         bob.move_to(np.zeros(7))
     assert isinstance(WorldClosed(), ArmfleetError)
+
+
+def test_the_live_api_clients_handles_say_the_same(served: Served) -> None:  # noqa: F811
+    """A client's handle of a removed arm gets the world's UnknownArm; after the client is
+    closed its handles refuse in one line (a regression guard: this already held)."""
+    world = served.world
+    served.step_in_background()
+    world.submit(lambda: world.spawn("toby", at=(1, 0))).result(timeout=60)
+    client = armfleet.connect(served.server.address)
+    try:
+        bob, toby = client.arm("bob"), client.arm("toby")
+        gripper = toby.gripper
+        world.submit(lambda: world.remove("toby")).result(timeout=60)
+        for use in (lambda: toby.move_to(np.zeros(7)), gripper.close, lambda: toby.positions):
+            with pytest.raises(RemoteError) as caught:
+                use()
+            assert caught.value.kind == "UnknownArm"
+            assert str(caught.value) == "no arm named 'toby'; arms: bob"
+    finally:
+        client.close()
+    with pytest.raises(ArmfleetError, match="this client is closed"):
+        bob.move_to(np.zeros(7))
