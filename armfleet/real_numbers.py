@@ -34,8 +34,14 @@ def is_real(value: object) -> bool:
 
 
 def all_real(values: object) -> bool:
-    """Whether ``values`` is a (possibly nested) sequence or array whose every element
-    :func:`is_real`; a bare number counts too. Mappings, sets, text and iterators don't."""
+    """Whether ``values`` is a (possibly nested) sequence or array (or array-like: anything
+    with ``__array__``) whose every element :func:`is_real`; a bare number counts too.
+    Mappings, sets, text and iterators don't."""
+    if not isinstance(values, np.ndarray) and hasattr(values, "__array__"):
+        try:  # an array-like (pin.SE3, a tensor, a pandas Series)
+            values = np.asarray(values)
+        except (TypeError, ValueError):
+            return False
     if isinstance(values, np.ndarray):
         if values.dtype.kind == "O":
             return all(is_real(v) for v in values.flat)

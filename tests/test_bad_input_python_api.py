@@ -343,6 +343,28 @@ def test_bad_world_settings_are_refused_before_any_world_exists(
     assert valid in message
 
 
+class ArrayLike:
+    """Numbers behind ``__array__`` (as a tensor or a pandas Series has), not a sequence."""
+
+    def __init__(self, values: FloatArray) -> None:
+        self._values = values
+
+    def __array__(self, *args: object, **kwargs: object) -> FloatArray:
+        return self._values  # NumPy casts it if asked for another dtype
+
+
+def test_numbers_in_an_array_like_are_still_numbers(scene: Scene) -> None:  # noqa: F811
+    """The rule refuses text and bools, not containers: bob goes where an array-like says."""
+    world, bob = scene.world, scene.bob
+    target = bob.positions
+    target[0] += 0.1
+    assert bob.move_to(ArrayLike(target)) > 0.0  # type: ignore[arg-type]
+    world.run(1.0)
+    assert np.abs(bob.positions - target).max() < 1e-3  # arrived [rad]
+    with pytest.raises(TargetTypeError):
+        bob.move_to(ArrayLike(np.array(as_text(target))))  # type: ignore[arg-type]
+
+
 def test_a_model_library_that_is_not_one_is_refused() -> None:
     with pytest.raises(
         ArmfleetError, match=r"models must be an armfleet\.description\.ModelLibrary"
