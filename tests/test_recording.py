@@ -19,7 +19,11 @@ from mcap.reader import make_reader
 import armfleet
 from armfleet.messages import ArmStatus, ControllerState, JointState, TFMessage, TransformStamped
 from armfleet.recording import open_recording
-from armfleet.recording.encode import encoder_for, rotation_to_quaternion
+from armfleet.recording.encode import (
+    ControllerStateEncoder,
+    encoder_for,
+    rotation_to_quaternion,
+)
 from armfleet.recording.interrupts import deferred_interrupts
 from armfleet.recording.mcap_sink import McapSink
 from armfleet.recording.replay_stream import ArmAppeared, ArmRemoved, replay_events
@@ -171,7 +175,7 @@ def test_tracking_error_is_reference_minus_feedback(contents: Any) -> None:
         reference = np.array(message["reference"]["positions"])
         feedback = np.array(message["feedback"]["positions"])
         assert message["error"]["positions"] == pytest.approx(reference - feedback, abs=1e-15)
-        moving += message["moving"]
+        moving += any(v != 0.0 for v in message["reference"]["velocities"])
     assert moving > 5
 
 
@@ -350,16 +354,20 @@ def test_quaternions_are_exact_also_at_half_turns(axis: tuple[float, ...], angle
     assert sign * q == pytest.approx(expected, abs=1e-8)
 
 
-def test_non_finite_numbers_become_null() -> None:
+def test_non_finite_numbers_are_not_written() -> None:
+    """JSON has no NaN: an array holding one is written empty ("not available" in ROS),
+    a transform holding one is left out (see tests/test_recording_schemas.py)."""
     state = JointState(
         1.5, ("a", "b"), np.array([0.1, np.nan]), np.array([0.0, 0.0]), np.array([np.inf, 1.0])
     )
     message = json.loads(encoder_for(JointState)(state))
-    assert message["position"] == [0.1, None] and message["effort"] == [None, 1.0]
+    assert message["position"] == [] and message["effort"] == []
+    assert message["velocity"] == [0.0, 0.0]
     assert message["header"]["stamp"] == {"sec": 1, "nanosec": 500_000_000, "nsec": 500_000_000}
-    broken = TFMessage((TransformStamped(0.0, "a", "b", np.full((4, 4), np.nan)),))
-    transform = json.loads(encoder_for(TFMessage)(broken))["transforms"][0]["transform"]
-    assert transform["rotation"] == {"x": None, "y": None, "z": None, "w": None}
+    good = TransformStamped(0.0, "a", "c", np.eye(4))
+    broken = TFMessage((TransformStamped(0.0, "a", "b", np.full((4, 4), np.nan)), good))
+    transforms = json.loads(encoder_for(TFMessage)(broken))["transforms"]
+    assert [t["child_frame_id"] for t in transforms] == ["c"]
 
 
 def test_fast_and_plain_encodings_agree() -> None:
@@ -370,7 +378,9 @@ def test_fast_and_plain_encodings_agree() -> None:
     fast = json.loads(encoder_for(ControllerState)(state))
     assert fast["reference"]["accelerations"] == state.reference_acceleration.tolist()
     assert fast["feedback"]["velocities"] == state.velocity.tolist()
-    assert fast["moving"] is True and fast["joint_names"] == ["j1", "j2"]
+    assert fast["joint_names"] == ["j1", "j2"]
+    assert fast["desired"] == fast["reference"] and fast["actual"] == fast["feedback"]
+    assert fast == json.loads(ControllerStateEncoder()._slow(state))
     status = ArmStatus(0.25, "bob", armfleet.messages.ArmMode.MOVING, "", (0, 3))
     assert json.loads(encoder_for(ArmStatus)(status)) == {
         "header": {

@@ -5,7 +5,10 @@ every arm at the physics rate, so the encoders of those three fill a per-topic
 template (built once per set of joint or frame names) with all the numbers of
 a message in one ``%`` operation. Numbers are written with 17 significant
 digits: reading them back gives the very same doubles. A message holding a
-non-finite number takes the slow path, which writes ``null`` for it.
+non-finite number takes the slow path, which does not write it: see the
+conventions in :mod:`armfleet.recording.schemas` (an array holding one is written
+empty, a transform holding one is left out, an own message's field holding one is
+left out) and :func:`numbers_or_nan` for reading such a message back.
 """
 
 from __future__ import annotations
@@ -63,14 +66,23 @@ def header(seconds: float, frame_id: str = "") -> dict[str, Any]:
 
 
 def dumps(value: Any) -> bytes:
-    """Compact JSON (no NaN: callers pass finite numbers or None)."""
+    """Compact JSON (no NaN: callers pass finite numbers only)."""
     return json.dumps(value, separators=(",", ":"), allow_nan=False).encode()
 
 
-def finite_list(values: Any) -> list[float | None]:
-    """Numbers as a list, ``None`` (JSON ``null``) where not finite."""
-    flat = np.asarray(values, dtype=float).ravel().tolist()
-    return [v if math.isfinite(v) else None for v in flat]
+def finite_or_empty(values: Any) -> list[float]:
+    """Numbers as a list; empty ("not available", as in ROS) if any is not finite."""
+    flat: list[float] = np.asarray(values, dtype=float).ravel().tolist()
+    return flat if all(math.isfinite(v) for v in flat) else []
+
+
+def numbers_or_nan(values: Any, count: int) -> tuple[float, ...]:
+    """``count`` numbers read back from a recorded array: NaN for each if the array was
+    written empty or is missing (a value was not finite), and for a ``null`` (recordings
+    made before non-finite values were left out)."""
+    if not values:
+        return (math.nan,) * count
+    return tuple(math.nan if v is None else float(v) for v in values)
 
 
 def _literal(value: Any) -> str:
@@ -99,9 +111,9 @@ class JointStateEncoder:
                 {
                     "header": header(message.stamp),
                     "name": list(message.name),
-                    "position": finite_list(message.position),
-                    "velocity": finite_list(message.velocity),
-                    "effort": finite_list(message.effort),
+                    "position": finite_or_empty(message.position),
+                    "velocity": finite_or_empty(message.velocity),
+                    "effort": finite_or_empty(message.effort),
                 }
             )
         template = self._templates.get(message.name)
@@ -117,65 +129,96 @@ class JointStateEncoder:
 
 
 # -- control_msgs/msg/JointTrajectoryControllerState -------------------------------------
-class ControllerStateEncoder:
-    """``ControllerState`` -> ``control_msgs/msg/JointTrajectoryControllerState``.
+_NO_TIME = '"time_from_start":{"sec":0,"nanosec":0}'
+_EMPTY_POINT = '{"positions":[],"velocities":[],"accelerations":[],"effort":[],' + _NO_TIME + "}"
+_EMPTY_MULTI_DOF = '{"transforms":[],"velocities":[],"accelerations":[],' + _NO_TIME + "}"
+_MULTI_DOF = ",".join(
+    f'"multi_dof_{part}":{_EMPTY_MULTI_DOF}'
+    for part in ("reference", "feedback", "error", "output", "desired", "actual")
+)
 
-    ``error.positions`` is reference - feedback, the tracking error.
+
+def _point(positions: str, velocities: str, accelerations: str) -> str:
+    """A JointTrajectoryPoint with the given JSON arrays and no effort."""
+    return (
+        f'{{"positions":{positions},"velocities":{velocities},'
+        f'"accelerations":{accelerations},"effort":[],{_NO_TIME}}}'
+    )
+
+
+class ControllerStateEncoder:
+    """``ControllerState`` -> ``control_msgs/msg/JointTrajectoryControllerState``, every
+    field of the ROS 2 Humble message (see :data:`~armfleet.recording.schemas.CONTROLLER_STATE`).
+
+    ``error`` is reference - feedback (positions and velocities); ``desired`` and
+    ``actual`` repeat ``reference`` and ``feedback``; ``output`` and the multi-DOF
+    points are empty.
     """
 
     schema = CONTROLLER_STATE
 
     def __init__(self) -> None:
-        self._templates: dict[tuple[str, ...], str] = {}
+        self._templates: dict[tuple[str, ...], tuple[str, str, str]] = {}
 
     def __call__(self, message: ControllerState) -> bytes:
         n = len(message.name)
         reference, position = message.reference_position, message.position
+        ref_velocity, velocity = message.reference_velocity, message.velocity
         values = np.concatenate(
             (
                 reference,
-                message.reference_velocity,
+                ref_velocity,
                 message.reference_acceleration,
                 position,
-                message.velocity,
+                velocity,
                 reference - position,
+                ref_velocity - velocity,
             )
         )
-        if values.shape != (6 * n,) or not np.isfinite(values).all():
-            return dumps(
-                {
-                    "header": header(message.stamp),
-                    "joint_names": list(message.name),
-                    "reference": {
-                        "positions": finite_list(reference),
-                        "velocities": finite_list(message.reference_velocity),
-                        "accelerations": finite_list(message.reference_acceleration),
-                    },
-                    "feedback": {
-                        "positions": finite_list(position),
-                        "velocities": finite_list(message.velocity),
-                    },
-                    "error": {
-                        "positions": finite_list(np.subtract(reference, position)),
-                        "velocities": [],
-                    },
-                    "moving": bool(message.moving),
-                }
-            )
-        template = self._templates.get(message.name)
-        if template is None:
+        if values.shape != (7 * n,) or not np.isfinite(values).all():
+            return self._slow(message)
+        templates = self._templates.get(message.name)
+        if templates is None:
             array = _numbers(n)
-            template = (
-                f'{{{_HEADER},"joint_names":{_literal(list(message.name))},'
-                f'"reference":{{"positions":{array},"velocities":{array},'
-                f'"accelerations":{array}}},'
-                f'"feedback":{{"positions":{array},"velocities":{array}}},'
-                f'"error":{{"positions":{array},"velocities":[]}},"moving":%s}}'
+            templates = (
+                _point(array, array, array),
+                _point(array, array, "[]"),
+                f'{{{_HEADER},"joint_names":{_literal(list(message.name))},',
             )
-            self._templates[message.name] = template
+            self._templates[message.name] = templates
+        three, two, head = templates
+        numbers = values.tolist()
         sec, nanosec = _stamp(message.stamp)
-        moving = "true" if message.moving else "false"
-        return (template % (sec, nanosec, nanosec, *values.tolist(), moving)).encode()
+        ref = three % tuple(numbers[: 3 * n])
+        feedback = two % tuple(numbers[3 * n : 5 * n])
+        error = two % tuple(numbers[5 * n :])
+        return self._assemble(head % (sec, nanosec, nanosec), ref, feedback, error)
+
+    @staticmethod
+    def _assemble(head: str, reference: str, feedback: str, error: str) -> bytes:
+        return (
+            f'{head}"reference":{reference},"feedback":{feedback},"error":{error},'
+            f'"output":{_EMPTY_POINT},"desired":{reference},"actual":{feedback},'
+            f'"multi_dof_joint_names":[],{_MULTI_DOF}}}'
+        ).encode()
+
+    def _slow(self, message: ControllerState) -> bytes:
+        """The same message when a value is not finite: each array holding one is empty."""
+
+        def point(*arrays: Any) -> str:
+            texts = [dumps(finite_or_empty(a)).decode() for a in arrays]
+            return _point(*texts, *(["[]"] * (3 - len(texts))))
+
+        head = dumps({"header": header(message.stamp), "joint_names": list(message.name)})
+        reference = point(
+            message.reference_position, message.reference_velocity, message.reference_acceleration
+        )
+        feedback = point(message.position, message.velocity)
+        error = point(
+            np.subtract(message.reference_position, message.position),
+            np.subtract(message.reference_velocity, message.velocity),
+        )
+        return self._assemble(head.decode()[:-1] + ",", reference, feedback, error)
 
 
 # -- tf2_msgs/msg/TFMessage --------------------------------------------------------------
@@ -239,21 +282,23 @@ class TFMessageEncoder:
         return (template % tuple(values)).encode()
 
     def _slow(self, message: TFMessage) -> bytes:
-        return dumps({"transforms": [self._plain(t, t.matrix) for t in message.transforms]})
+        """The message without its transforms that are not 4x4 and finite (unknown poses
+        are not published, as in ROS)."""
+        transforms = []
+        for transform in message.transforms:
+            row = np.asarray(transform.matrix, dtype=float).ravel().tolist()
+            if len(row) == 16 and all(math.isfinite(v) for v in row):
+                transforms.append(self._plain(transform, row))
+        return dumps({"transforms": transforms})
 
     @staticmethod
-    def _plain(transform: Any, matrix: Any) -> dict[str, Any]:
-        row = np.asarray(matrix, dtype=float).ravel().tolist()
-        if len(row) != 16:
-            row = [math.nan] * 16
-        rotation = rotation_to_quaternion(row) if np.isfinite(row).all() else (None,) * 4
-        translation = finite_list([row[3], row[7], row[11]])
+    def _plain(transform: Any, row: list[float]) -> dict[str, Any]:
         return {
             "header": header(transform.stamp, transform.frame_id),
             "child_frame_id": transform.child_frame_id,
             "transform": {
-                "translation": dict(zip("xyz", translation, strict=True)),
-                "rotation": dict(zip("xyzw", rotation, strict=True)),
+                "translation": dict(zip("xyz", (row[3], row[7], row[11]), strict=True)),
+                "rotation": dict(zip("xyzw", rotation_to_quaternion(row), strict=True)),
             },
         }
 
@@ -266,7 +311,7 @@ class JointCommandEncoder:
 
     def __call__(self, message: JointCommand) -> bytes:
         return dumps(
-            {"layout": {"dim": [], "data_offset": 0}, "data": finite_list(message.positions)}
+            {"layout": {"dim": [], "data_offset": 0}, "data": finite_or_empty(message.positions)}
         )
 
 
@@ -280,15 +325,23 @@ class StringEncoder:
 
 
 # -- anything else -----------------------------------------------------------------------
+class _NotFinite:
+    """What :func:`plain` returns for a value holding a non-finite number."""
+
+
+NOT_FINITE = _NotFinite()
+
+
 def plain(value: Any) -> Any:
     """``value`` as JSON values: dataclasses as objects (``stamp`` as a ROS header),
-    enums as their value, arrays as lists, non-finite numbers as ``None``."""
+    enums as their value, arrays as lists. A number, or a list of them, that is not all
+    finite becomes :data:`NOT_FINITE`, and an object leaves such a field out."""
     if isinstance(value, bool | int | str) or value is None:
         return value
     if isinstance(value, float):
-        return value if math.isfinite(value) else None
+        return value if math.isfinite(value) else NOT_FINITE
     if isinstance(value, np.ndarray):
-        return finite_list(value) if value.dtype.kind in "fiu" else plain(value.tolist())
+        return finite_or_none(value) if value.dtype.kind in "fiu" else plain(value.tolist())
     if isinstance(value, np.generic):
         return plain(value.item())
     if isinstance(value, enum.Enum):
@@ -299,14 +352,28 @@ def plain(value: Any) -> Any:
             item = getattr(value, field.name)
             if field.name == "stamp":
                 fields["header"] = header(float(item))
-            else:
-                fields[field.name] = plain(item)
+            elif (written := plain(item)) is not NOT_FINITE:
+                fields[field.name] = written
         return fields
     if isinstance(value, list | tuple):
-        return [plain(item) for item in value]
+        items = [plain(item) for item in value]
+        return NOT_FINITE if any(item is NOT_FINITE for item in items) else items
     if isinstance(value, dict):
-        return {str(key): plain(item) for key, item in value.items()}
+        pairs = {str(key): plain(item) for key, item in value.items()}
+        return {key: item for key, item in pairs.items() if item is not NOT_FINITE}
     return str(value)
+
+
+def finite_or_none(values: np.ndarray) -> Any:
+    """A numeric array as a list, or NOT_FINITE if any value is not finite."""
+    flat: list[float] = values.astype(float).ravel().tolist()
+    return flat if all(math.isfinite(v) for v in flat) else NOT_FINITE
+
+
+def _json_value(value: Any) -> Any:
+    """:func:`plain`, with a top-level value that is not finite written as ``null``."""
+    written = plain(value)
+    return None if written is NOT_FINITE else written
 
 
 class DataclassEncoder:
@@ -316,7 +383,7 @@ class DataclassEncoder:
         self.schema = dataclass_schema(message_type)
 
     def __call__(self, message: Any) -> bytes:
-        return dumps(plain(message))
+        return dumps(_json_value(message))
 
 
 class AnyEncoder:
@@ -329,7 +396,7 @@ class AnyEncoder:
         )
 
     def __call__(self, message: Any) -> bytes:
-        return dumps(plain(message))
+        return dumps(_json_value(message))
 
 
 _ROS_ENCODERS: dict[type, Callable[[], MessageEncoder]] = {

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from armfleet.recording.arm_record import ArmRecord
+from armfleet.recording.encode import numbers_or_nan
 from armfleet.recording.reader import Recording
 
 NS_PER_S = 1_000_000_000
@@ -126,8 +127,9 @@ def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterato
 
 def _positions(recording: Recording, arm: str, time_ns: int, data: bytes) -> JointPositions:
     message = recording.decode(f"/{arm}/joint_states", data)
-    positions = tuple(float("nan") if v is None else float(v) for v in message["position"])
-    return JointPositions(time_ns, arm, tuple(message["name"]), positions)
+    names = tuple(message["name"])
+    positions = numbers_or_nan(message.get("position"), len(names))
+    return JointPositions(time_ns, arm, names, positions)
 
 
 def _release(

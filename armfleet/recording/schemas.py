@@ -12,9 +12,20 @@ Conventions:
     * A ``stamp`` [s] becomes a ROS ``header`` whose ``stamp`` holds ``sec`` and
       ``nanosec`` (``builtin_interfaces/msg/Time``), plus the same value as
       ``nsec``, the field Foxglove reads in JSON.
-    * JSON has no NaN or infinity: such a value (a faulted arm's effort, say) is
-      written as ``null``. Every type is a single JSON type, as Foxglove wants.
-    * Schemas are self-contained (no ``$ref``).
+    * Every field has a single JSON type: Foxglove turns a JSON Schema into
+      message fields by its ``type`` and refuses a list such as
+      ``["number", "null"]`` (or a field without one), which would hide the whole
+      channel. Schemas are self-contained (no ``$ref``).
+    * Non-finite numbers (a faulted arm's torques, a physics blow-up, a refused
+      NaN target) are **never written**, because JSON has no NaN or infinity and
+      writing ``null`` or ``"NaN"`` in a ``number`` field would break either the
+      schema or Foxglove. Instead, as ROS itself marks data that is not
+      available: an array of numbers holding one is written empty (ROS's
+      ``JointState`` and ``JointTrajectoryPoint`` define an empty array as "not
+      available"); a transform holding one is left out of its ``TFMessage``; a
+      field of armfleet's own messages holding one is left out of its object, and
+      those schemas require only the fields that cannot hold one. Readers turn
+      what is missing back into NaN (:func:`armfleet.recording.encode.numbers_or_nan`).
 """
 
 from __future__ import annotations
@@ -59,12 +70,14 @@ def number(description: str = "") -> Schema:
     return {"type": "number", **({"description": description} if description else {})}
 
 
+#: How an array of numbers says it is not available.
+EMPTY_IF_NOT_FINITE = "empty when a value is not finite (not available, as in ROS)"
+
+
 def numbers(description: str = "") -> Schema:
-    """An array of numbers (``null`` where a value is not finite)."""
-    schema: Schema = {"type": "array", "items": {"type": "number"}}
-    if description:
-        schema["description"] = description
-    return schema
+    """An array of numbers (written empty when any value is not finite)."""
+    text = f"{description}; {EMPTY_IF_NOT_FINITE}" if description else EMPTY_IF_NOT_FINITE
+    return {"type": "array", "items": {"type": "number"}, "description": text}
 
 
 def strings(description: str = "") -> Schema:
@@ -74,9 +87,15 @@ def strings(description: str = "") -> Schema:
     return schema
 
 
-def obj(properties: dict[str, Schema], title: str = "", description: str = "") -> Schema:
-    """An object with every listed property required."""
-    schema: Schema = {"type": "object", "properties": properties, "required": list(properties)}
+def obj(
+    properties: dict[str, Schema],
+    title: str = "",
+    description: str = "",
+    optional: tuple[str, ...] = (),
+) -> Schema:
+    """An object with every listed property required but those ``optional``."""
+    required = [name for name in properties if name not in optional]
+    schema: Schema = {"type": "object", "properties": properties, "required": required}
     if title:
         schema["title"] = title
     if description:
@@ -166,40 +185,86 @@ FLOAT64_MULTI_ARRAY = MessageSchema(
 )
 
 
-def _trajectory_point(fields: dict[str, str]) -> Schema:
+DURATION = obj(
+    {"sec": {"type": "integer"}, "nanosec": {"type": "integer", "minimum": 0}},
+    title="builtin_interfaces/msg/Duration",
+)
+TRANSFORM = obj(
+    {"translation": VECTOR3, "rotation": QUATERNION}, title="geometry_msgs/msg/Transform"
+)
+TWIST = obj({"linear": VECTOR3, "angular": VECTOR3}, title="geometry_msgs/msg/Twist")
+
+
+def trajectory_point(description: str, **fields: str) -> Schema:
+    """A ``trajectory_msgs/msg/JointTrajectoryPoint``; arrays not in ``fields`` are empty."""
+    arrays = ("positions", "velocities", "accelerations", "effort")
     return obj(
-        {name: numbers(text) for name, text in fields.items()},
+        {
+            **{name: numbers(fields.get(name, "empty: not recorded")) for name in arrays},
+            "time_from_start": {**DURATION, "description": "0: not tracked"},
+        },
         title="trajectory_msgs/msg/JointTrajectoryPoint",
+        description=description,
     )
 
 
+def _multi_dof_point(description: str) -> Schema:
+    return obj(
+        {
+            "transforms": {"type": "array", "items": TRANSFORM},
+            "velocities": {"type": "array", "items": TWIST},
+            "accelerations": {"type": "array", "items": TWIST},
+            "time_from_start": DURATION,
+        },
+        title="trajectory_msgs/msg/MultiDOFJointTrajectoryPoint",
+        description=description,
+    )
+
+
+_REFERENCE = trajectory_point(
+    "the set point: the Ruckig reference at the stamp",
+    positions="[rad or m]",
+    velocities="[rad/s or m/s]",
+    accelerations="[rad/s^2 or m/s^2]",
+)
+_FEEDBACK = trajectory_point(
+    "the measured state at the stamp",
+    positions="measured [rad or m]",
+    velocities="measured [rad/s or m/s]",
+)
+_NO_MULTI_DOF = "empty: armfleet's arms have no multi-DOF joints"
+
+#: ``control_msgs/msg/JointTrajectoryControllerState`` as ROS 2 Humble defines it: Jazzy's
+#: fields plus the deprecated ``desired`` and ``actual`` (copies of ``reference`` and
+#: ``feedback``, as Humble's joint_trajectory_controller fills them), so a reader of either
+#: release finds every field it knows. (Kilted's ``speed_scaling_factor`` is not written.)
 CONTROLLER_STATE = MessageSchema(
     "control_msgs/msg/JointTrajectoryControllerState",
     obj(
         {
             "header": HEADER,
             "joint_names": strings("controlled joints"),
-            "reference": _trajectory_point(
-                {
-                    "positions": "Ruckig reference [rad or m]",
-                    "velocities": "[rad/s or m/s]",
-                    "accelerations": "[rad/s^2 or m/s^2]",
-                }
+            "reference": _REFERENCE,
+            "feedback": _FEEDBACK,
+            "error": trajectory_point(
+                "reference - feedback",
+                positions="tracking error [rad or m]",
+                velocities="velocity error [rad/s or m/s]",
             ),
-            "feedback": _trajectory_point(
-                {"positions": "measured [rad or m]", "velocities": "measured [rad/s or m/s]"}
+            "output": trajectory_point(
+                "the controller's output: empty here (its torques are the effort of "
+                "/<arm>/joint_states)"
             ),
-            "error": _trajectory_point(
-                {
-                    "positions": "tracking error reference - feedback [rad or m]",
-                    "velocities": "(empty: not recorded)",
-                }
-            ),
-            "moving": {"type": "boolean", "description": "the reference is still in motion"},
+            "desired": {**_REFERENCE, "description": "deprecated copy of reference"},
+            "actual": {**_FEEDBACK, "description": "deprecated copy of feedback"},
+            "multi_dof_joint_names": strings(_NO_MULTI_DOF),
+            **{
+                f"multi_dof_{part}": _multi_dof_point(_NO_MULTI_DOF)
+                for part in ("reference", "feedback", "error", "output", "desired", "actual")
+            },
         },
         title="control_msgs/msg/JointTrajectoryControllerState",
-        description="position_controller reference and feedback at one update; 'moving' "
-        "is armfleet's addition",
+        description="position_controller reference and feedback at one update",
     ),
 )
 
@@ -214,14 +279,34 @@ def dataclass_schema(cls: type) -> MessageSchema:
 
 
 def _object_schema(cls: type) -> Schema:
+    """Fields by type hint; those that can hold a non-finite number are optional."""
     hints = typing.get_type_hints(cls)
     properties: dict[str, Schema] = {}
+    optional: list[str] = []
     for field in dataclasses.fields(cls):
         if field.name == "stamp":
             properties["header"] = HEADER
-        else:
-            properties[field.name] = value_schema(hints[field.name])
-    return obj(properties, title=OWN_PACKAGE + cls.__name__, description=_summary(cls))
+            continue
+        schema = value_schema(hints[field.name])
+        if _holds_numbers(schema):
+            text = schema.get("description", "")
+            note = "left out when not finite"
+            schema = {**schema, "description": f"{text}; {note}" if text else note}
+            optional.append(field.name)
+        properties[field.name] = schema
+    return obj(
+        properties,
+        title=OWN_PACKAGE + cls.__name__,
+        description=_summary(cls),
+        optional=tuple(optional),
+    )
+
+
+def _holds_numbers(schema: Schema) -> bool:
+    """Whether a value of ``schema`` is a number or an array of them (may be non-finite)."""
+    if schema.get("type") == "number":
+        return True
+    return schema.get("type") == "array" and _holds_numbers(schema.get("items", {}))
 
 
 def value_schema(hint: Any) -> Schema:
@@ -238,7 +323,7 @@ def value_schema(hint: Any) -> Schema:
     if isinstance(hint, type) and issubclass(hint, enum.Enum):
         return {"type": "string", "enum": [member.value for member in hint]}
     if hint is np.ndarray or origin is np.ndarray:
-        return numbers()
+        return {"type": "array", "items": {"type": "number"}}
     if isinstance(hint, type) and dataclasses.is_dataclass(hint):
         return _object_schema(hint)
     if origin is tuple:

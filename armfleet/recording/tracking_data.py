@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from armfleet.recording.encode import numbers_or_nan
 from armfleet.recording.errors import RecordingError, UnknownRecordedArm
 from armfleet.recording.reader import Recording
 
@@ -115,8 +116,9 @@ def tracking_data(recording: Recording, arm: str) -> TrackingData:
     square_sum, values = 0.0, 0
     for i, message in enumerate(recording.messages([state_topic(arm)])):
         data = message.data
-        ref = np.array(data["reference"]["positions"], dtype=float)
-        pos = np.array(data["feedback"]["positions"], dtype=float)
+        joints = len(data["joint_names"])
+        ref = np.array(numbers_or_nan(data["reference"].get("positions"), joints))
+        pos = np.array(numbers_or_nan(data["feedback"].get("positions"), joints))
         error = np.abs(ref - pos)
         square_sum += float(np.sum(np.square(error)))
         values += error.size

@@ -1,0 +1,200 @@
+"""Every recorded message validates against its own channel's JSON Schema.
+
+One recording exercises every topic armfleet publishes: two arms moving until they touch
+(protective stop, ``/collisions``), a gripper closing and opening, a dynamic object on
+``/tf``, non-finite commands sent on the bus (refused, but recorded), and an arm whose
+controller produces non-finite torques (error). Every message of every channel is checked
+with ``jsonschema`` against the schema record of its channel, read with the official
+``mcap`` reader; and the schemas stay readable by Foxglove (one JSON type per field).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import jsonschema  # type: ignore[import-untyped]
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+
+import armfleet
+from armfleet.messages import ArmMode, ControllerState, GripperCommand, JointCommand, JointState
+from armfleet.recording.encode import encoder_for, numbers_or_nan
+
+#: control_msgs/msg/JointTrajectoryControllerState in ROS 2 Humble (rosidl field order).
+HUMBLE_CONTROLLER_STATE_FIELDS = (
+    "header", "joint_names", "reference", "feedback", "error", "output", "desired", "actual",
+    "multi_dof_joint_names", "multi_dof_reference", "multi_dof_feedback", "multi_dof_error",
+    "multi_dof_output", "multi_dof_desired", "multi_dof_actual",
+)  # fmt: skip
+#: trajectory_msgs/msg/JointTrajectoryPoint.
+POINT_FIELDS = ("positions", "velocities", "accelerations", "effort", "time_from_start")
+MULTI_DOF_POINT_FIELDS = ("transforms", "velocities", "accelerations", "time_from_start")
+
+
+@dataclass
+class Recorded:
+    path: Path
+    topics: set[str]
+    statuses: list[Any]
+
+
+def lean_forward(arm: armfleet.Arm) -> np.ndarray:
+    target = arm.positions.copy()
+    target[1] += 1.0  # shoulder forward
+    target[3] += 1.2  # elbow open
+    return target
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Recorded]:
+    path = tmp_path_factory.mktemp("schemas") / "everything.mcap"
+    statuses: list[Any] = []
+    with armfleet.World() as world:
+        recorder = armfleet.record(world, path)  # before the arms: /bringup too
+        world.bus.subscribe_all(lambda t, m: statuses.append(m) if t.endswith("/status") else None)
+        bob = world.spawn("bob", at=(0, 0))
+        toby = world.spawn("toby", at=(0.8, 0, 0, 180))  # facing bob, close enough to touch
+        world.add_object("cube", "box", size=(0.05, 0.05, 0.05), mass=0.1, at=(0.4, -0.5, 0.025))
+        bob.gripper.close()
+        toby.gripper.move_to(0.02)
+        world.run(0.3)
+        bob.gripper.open()
+        # Non-finite commands on the bus: refused by the controllers, recorded as sent.
+        world.bus.publish("/bob/position_controller/commands", JointCommand((math.nan,) * 7))
+        world.bus.publish(
+            "/bob/gripper_controller/commands", GripperCommand(math.inf, False, math.nan)
+        )
+        bob.move_to(lean_forward(bob))
+        toby.move_to(lean_forward(toby))
+        world.run(2.5)  # they touch: protective stop
+        bob.reset()
+        toby.reset()
+        toby.position_controller._kp[:] = math.nan  # a controller gone wrong: NaN torques
+        toby.move_to(toby.positions + 0.1)
+        world.run(0.2)
+        topics = set(world.bus.topics)
+        recorder.stop()
+    yield Recorded(path, topics, statuses)
+
+
+def channels_and_messages(path: Path) -> tuple[dict[str, Any], dict[str, list[Any]]]:
+    """(JSON Schema by topic, decoded messages by topic), all from the official reader."""
+    schemas: dict[str, Any] = {}
+    messages: dict[str, list[Any]] = {}
+    with path.open("rb") as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        assert summary is not None
+        for channel in summary.channels.values():
+            record = summary.schemas[channel.schema_id]
+            assert record.encoding == "jsonschema" and channel.message_encoding == "json"
+            schemas[channel.topic] = json.loads(record.data)
+            messages[channel.topic] = []
+        for _, channel, message in reader.iter_messages(log_time_order=False):
+            messages[channel.topic].append(json.loads(message.data))
+    return schemas, messages
+
+
+@pytest.fixture(scope="module")
+def contents(recorded: Recorded) -> tuple[dict[str, Any], dict[str, list[Any]]]:
+    return channels_and_messages(recorded.path)
+
+
+def test_the_run_exercised_every_case(recorded: Recorded, contents: Any) -> None:
+    """What the validation below must cover did happen: else it proves little."""
+    _, messages = contents
+    assert recorded.topics <= set(messages)
+    for topic in recorded.topics:
+        assert messages[topic], f"nothing recorded on {topic}"
+    modes = {s.mode for s in recorded.statuses}
+    assert {ArmMode.MOVING, ArmMode.PROTECTIVE_STOP, ArmMode.ERROR} <= modes
+    assert any(m["contacts"] for m in messages["/collisions"])
+    assert any(t["child_frame_id"] == "cube" for m in messages["/tf"] for t in m["transforms"])
+    assert any(m["data"] == [] for m in messages["/bob/position_controller/commands"])
+    gripper_commands = messages["/bob/gripper_controller/commands"]
+    assert any("width" not in m and "force" not in m for m in gripper_commands)
+    # toby's NaN torques never reach /toby/joint_states: the fault replaces them first.
+    assert all(len(m["effort"]) == len(m["name"]) for m in messages["/toby/joint_states"])
+
+
+def test_every_message_validates_against_its_channels_schema(contents: Any) -> None:
+    schemas, messages = contents
+    checked = Counter[str]()
+    for topic, schema in schemas.items():
+        jsonschema.Draft202012Validator.check_schema(schema)
+        validator = jsonschema.Draft202012Validator(schema)
+        for message in messages[topic]:
+            errors = list(validator.iter_errors(message))
+            assert not errors, f"{topic}: {errors[0].message} at {list(errors[0].path)}"
+            checked[topic] += 1
+    print(dict(checked))
+    assert sum(checked.values()) == sum(len(m) for m in messages.values()) > 10_000
+
+
+def every_field_type(schema: Any, where: str = "") -> Iterator[tuple[str, Any]]:
+    """(path, ``type``) of every property and array item, as Foxglove walks a schema."""
+    for name, field in schema.get("properties", {}).items():
+        yield f"{where}.{name}", field.get("type")
+        if field.get("type") == "object":
+            yield from every_field_type(field, f"{where}.{name}")
+        if field.get("type") == "array":
+            items = field.get("items", {})
+            yield f"{where}.{name}[]", items.get("type")
+            if items.get("type") == "object":
+                yield from every_field_type(items, f"{where}.{name}[]")
+
+
+def test_every_field_has_one_json_type_as_foxglove_needs(contents: Any) -> None:
+    """Foxglove's JSON Schema reader takes a field's ``type`` as one string (boolean,
+    string, number, integer, object, array) and refuses the channel otherwise."""
+    schemas, _ = contents
+    allowed = {"boolean", "string", "number", "integer", "object", "array"}
+    for topic, schema in schemas.items():
+        assert schema["type"] == "object"
+        for where, kind in every_field_type(schema):
+            assert kind in allowed, f"{topic}: {where} has type {kind!r}"
+
+
+def test_the_controller_state_is_the_whole_ros_message(contents: Any) -> None:
+    _, messages = contents
+    for message in messages["/bob/position_controller/state"][::97]:
+        assert tuple(message) == HUMBLE_CONTROLLER_STATE_FIELDS
+        for part in ("reference", "feedback", "error", "output", "desired", "actual"):
+            assert tuple(message[part]) == POINT_FIELDS
+            assert tuple(message[f"multi_dof_{part}"]) == MULTI_DOF_POINT_FIELDS
+        assert message["desired"] == message["reference"]
+        assert message["actual"] == message["feedback"]
+        n = len(message["joint_names"])
+        reference, feedback = message["reference"], message["feedback"]
+        for key in ("positions", "velocities"):
+            expected = np.subtract(reference[key], feedback[key])
+            assert message["error"][key] == pytest.approx(expected.tolist(), abs=1e-15)
+            assert len(reference[key]) == n
+        assert len(reference["accelerations"]) == n and feedback["accelerations"] == []
+
+
+def test_non_finite_values_are_left_out_and_read_back_as_nan() -> None:
+    state = JointState(
+        1.5, ("a", "b"), np.array([0.1, np.nan]), np.array([0.0, 0.0]), np.array([np.inf, 1.0])
+    )
+    message = json.loads(encoder_for(JointState)(state))
+    assert message["position"] == [] and message["effort"] == []  # "not available" in ROS
+    assert message["velocity"] == [0.0, 0.0]
+    assert numbers_or_nan(message["position"], 2) == pytest.approx([math.nan] * 2, nan_ok=True)
+    assert numbers_or_nan([0.5, None], 2) == pytest.approx([0.5, math.nan], nan_ok=True)
+
+    fine, broken = np.array([0.1, 0.2]), np.array([np.nan, 0.2])  # a measured position
+    controller_state = ControllerState(0.5, ("a", "b"), fine, fine, fine, broken, fine, False)
+    controller = json.loads(encoder_for(ControllerState)(controller_state))
+    assert controller["feedback"]["positions"] == [] and controller["error"]["positions"] == []
+    assert controller["reference"]["positions"] == [0.1, 0.2]
+
+    command = json.loads(encoder_for(GripperCommand)(GripperCommand(math.nan, True, 20.0)))
+    assert command == {"grasp": True, "force": 20.0}
