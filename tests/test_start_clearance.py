@@ -24,6 +24,7 @@ from armfleet.arm_assembly import start_positions
 from armfleet.errors import StartPoseCollision
 from armfleet.kinematics import ArmKinematics
 from armfleet.spawn_pose import SpawnPose
+from armfleet.spec import SpecError, parse_spec
 from armfleet.start_clearance import CLEARANCE_M
 from tests.remote_world import ARMFLEET, runtime_env
 
@@ -190,3 +191,27 @@ def test_a_new_world_from_the_cli_refuses_touching_arms(tmp_path: Path) -> None:
     lines = result.stderr.splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
     assert "toby would touch bob at its start pose" in lines[0]
+
+
+@pytest.mark.parametrize(
+    ("extra", "field", "line", "says"),
+    [
+        pytest.param(
+            "  - name: toby\n    model: panda\n    at_m: [0.3, 0]\n",
+            "arms[1].at_m", 6, "toby would touch bob",
+            id="touching a neighbour -> the arm's at_m",
+        ),
+        pytest.param(
+            f"  - name: toby\n    model: panda\n    at_m: [3, 0]\n"
+            f"    initial_positions: {list(FOLDED)}\n",
+            "arms[1].initial_positions", 7, "toby would touch itself",
+            id="folded into itself -> the arm's initial_positions",
+        ),
+    ],
+)  # fmt: skip
+def test_a_spec_points_at_the_line_to_change(extra: str, field: str, line: int, says: str) -> None:
+    text = "arms:\n  - name: bob\n    model: panda\n" + extra
+    with pytest.raises(SpecError) as raised:
+        parse_spec(text, "cell.yaml")
+    assert (raised.value.field, raised.value.line) == (field, line)
+    assert says in raised.value.problem

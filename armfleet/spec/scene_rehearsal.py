@@ -33,7 +33,7 @@ from armfleet.arm_assembly import start_positions
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.description import ArmDescription, ModelLibrary
-from armfleet.errors import ArmfleetError
+from armfleet.errors import ArmfleetError, StartPoseCollision
 from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
 from armfleet.kinematics import ArmKinematics
@@ -108,7 +108,7 @@ class SceneRehearsal:
 
         Raises:
             SpecError: at the arm's pose (``at_m``, or the grid's ``spacing_m``), naming
-                what the arm would touch.
+                what the arm would touch; at its ``initial_positions`` if it is itself.
         """
         for arm in self._arms:
             try:
@@ -122,7 +122,11 @@ class SceneRehearsal:
                     self._contacts.neighbours(),
                 )
             except ArmfleetError as exc:
-                given = [k for k in ("at_m", "spacing_m", "initial_positions") if k in arm.entry]
+                # Folded into itself: its initial positions; touching something else: its pose.
+                itself = isinstance(exc, StartPoseCollision) and exc.other == arm.spec.name
+                keys = ["initial_positions"] if itself else []
+                keys += ["at_m", "spacing_m", "initial_positions"]
+                given = [k for k in keys if k in arm.entry]
                 self._fail(arm.entry, arm.field, given[0] if given else "name", exc)
             self._contacts.add_arm(arm.spec.name, body)
 
