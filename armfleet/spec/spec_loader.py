@@ -33,7 +33,6 @@ from pathlib import Path
 from armfleet.controllers.parameters import check_parameter
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
-from armfleet.description import ModelLibrary
 from armfleet.errors import ParameterError
 from armfleet.located_yaml import LocatedDict, YamlDocumentError, load_located, read_located
 from armfleet.paths import data_dir
@@ -41,7 +40,6 @@ from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
 from armfleet.spec.object_entries import read_objects
-from armfleet.spec.scene_rehearsal import SceneRehearsal
 from armfleet.spec.scene_rehearsal import SceneRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
