@@ -58,7 +58,8 @@ def start(args: list[str], cwd: Path) -> subprocess.Popen[str]:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=os.environ | {"XDG_RUNTIME_DIR": str(cwd)},  # never join the developer's world
+        # Never join the developer's world; a terminal wide enough for per-arm status.
+        env=os.environ | {"XDG_RUNTIME_DIR": str(cwd), "COLUMNS": "400"},
     )
 
 
@@ -174,7 +175,7 @@ BAD_INVOCATIONS: dict[str, tuple[list[str], list[str]]] = {
     "duplicate-name": (replaced("toby", "bob"), ["'bob'", "already used"]),
     "unknown-command": (["bogus"], ["'bogus'", *COMMANDS]),
     "unknown-option": ([*GOOD, "--bogus"], ["--bogus", "--help"]),
-    "negative-duration": (replaced("0", "-1"), ["--duration -1", ">= 0"]),
+    "negative-duration": (replaced("0", "-1"), ["--duration: '-1'", "seconds in [0, "]),
     "duration-not-a-number": (replaced("0", "soon"), ["--duration", "'soon'"]),
     "missing-at": ([*GOOD[:3], *GOOD[6:]], ["--at"]),
     "no-arguments": ([], list(COMMANDS)),

@@ -183,8 +183,8 @@ def not_mcap(tmp_path_factory: pytest.TempPathFactory) -> Path:
         (["plot", "{run}", "--arm", "bobby"], "has no arm named 'bobby'; arms: bob, toby"),
         (["plot", "{run}", "-o", "{tmp}/plot.jpg"], "name a .png, .svg, .pdf file"),
         (["replay", "{run}", "--html", "{tmp}/out.htm"], "--html {tmp}/out.htm: name an .html"),
-        (["replay", "{run}", "--speed", "0"], "--speed 0.0 is invalid"),
-        (["replay", "{run}", "--speed", "nan"], "--speed nan is invalid"),
+        (["replay", "{run}", "--speed", "0"], "--speed: '0' is invalid"),
+        (["replay", "{run}", "--speed", "nan"], "--speed: 'nan' is invalid"),
         (["info", "{run}", "--connect", "tcp://127.0.0.1:9"], "a recording or --connect"),
         (
             ["spawn", "bob", "--at", "0,0", "--record", "run.bag"],

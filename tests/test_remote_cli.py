@@ -62,7 +62,7 @@ def fails(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
         ),
         (["spawn", "carol", "--at", "2,0", "--new-world", "--connect", "5555"], "exclude each"),
         (["arms", "--connect", "tcp://nowhere"], "address 'tcp://nowhere' is malformed"),
-        (["arms", "--timeout", "-1"], "--timeout -1.0 is invalid"),
+        (["arms", "--timeout", "-1"], "argument --timeout: '-1' is invalid"),
     ],
     ids=lambda value: " ".join(value) if isinstance(value, list) else None,
 )

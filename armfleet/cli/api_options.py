@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 
-from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.number_arguments import port_or_free, request_timeout
+from armfleet.cli.parser import OneLineParser
 from armfleet.remote import Client, RunState, WorldServer, connect
 from armfleet.remote.address import DEFAULT_BIND, check_bind_host
 from armfleet.remote.client import DEFAULT_TIMEOUT_S
@@ -25,17 +25,13 @@ def add_api_arguments(parser: argparse.ArgumentParser) -> None:
         "other lets other machines command the world",
     )  # fmt: skip
     group.add_argument(
-        "--api-port", type=int, default=0, metavar="PORT",
+        "--api-port", type=port_or_free, default=0, metavar="PORT",
         help="TCP port of the API (default: a free one)",
     )  # fmt: skip
     group.add_argument("--no-api", action="store_true", help="do not serve the live API")
 
 
 def check_api_arguments(args: argparse.Namespace) -> None:
-    if not 0 <= args.api_port <= 65535:
-        raise UsageError(
-            f"--api-port {args.api_port} is invalid; give 1-65535, or 0 for a free one"
-        )
     check_bind_host(args.api_bind)
 
 
@@ -80,17 +76,14 @@ def add_connect_arguments(parser: argparse.ArgumentParser) -> None:
         "found through the per-user runtime file)",
     )  # fmt: skip
     parser.add_argument(
-        "--timeout", type=float, default=DEFAULT_TIMEOUT_S, metavar="S",
+        "--timeout", type=request_timeout, default=DEFAULT_TIMEOUT_S, metavar="S",
         help=f"wait for the world's answers [s] (default {DEFAULT_TIMEOUT_S:g})",
     )  # fmt: skip
 
 
 def connect_from(args: argparse.Namespace) -> Client:
-    """Connect as ``--connect``/``--timeout`` say."""
-    timeout: float = args.timeout
-    if not (math.isfinite(timeout) and timeout > 0):
-        raise UsageError(f"--timeout {timeout} is invalid; give seconds > 0")
-    return connect(args.connect, timeout=timeout)
+    """Connect as ``--connect``/``--timeout`` say (parsing checked ``--timeout``)."""
+    return connect(args.connect, timeout=args.timeout)
 
 
 def add_remote_command(

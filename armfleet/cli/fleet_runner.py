@@ -53,6 +53,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
 
         world.bus.subscribe("/bringup", on_bringup)
 
+    finished = ""  # the closing line of a run that reached its --duration
     try:
         started = time.perf_counter()
         world = launch(spec, viewer=viewer, viewer_port=args.viewer_port, before_spawn=before_spawn)
@@ -73,6 +74,10 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
                         f"{'paused' if paused else 'resumed'} at t={world.time:.3f}s"
                     ),
                 )
+                finished = (
+                    f"ran --duration {args.duration:g} s (t={world.time:.3f}s, "
+                    f"{time.perf_counter() - started:.2f} s wall in all); shut down cleanly"
+                )
             finally:
                 if server is not None:
                     server.close()
@@ -83,4 +88,6 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
         say("interrupted; shut down cleanly")
     finally:
         recording.close()  # an MCAP file is completed even if bring-up failed
+    if finished:
+        say(finished)
     return 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from armfleet.cli.api_options import add_remote_command, connect_from
+from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.messages import GripperState
 from armfleet.remote.remote_gripper import GRIP_WAIT_TIMEOUT_S
@@ -29,7 +30,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help="return once the fingers stop; print width, mode and whether they hold something",
     )  # fmt: skip
     parser.add_argument(
-        "--wait-timeout", type=float, default=GRIP_WAIT_TIMEOUT_S, metavar="S",
+        "--wait-timeout", type=wait_timeout, default=GRIP_WAIT_TIMEOUT_S, metavar="S",
         help=f"longest wait with --wait [s] (default {GRIP_WAIT_TIMEOUT_S:g})",
     )  # fmt: skip
     parser.set_defaults(run=run)

@@ -6,11 +6,13 @@ import argparse
 import contextlib
 import queue
 import sys
+import time
 
 from armfleet.cli.parser import UsageError
 from armfleet.messages import BringupEvent, BringupStage
 from armfleet.remote import Client, NoWorldFound, connect, runtime_file
 from armfleet.remote.address import DEFAULT_BIND
+from armfleet.remote.runtime_file import WorldEntry
 from armfleet.spec import FleetSpec
 
 #: How long an unasked-for world in the runtime file may take to answer [s].
@@ -32,11 +34,15 @@ _NEW_WORLD_OPTIONS = (
 
 def running_world(args: argparse.Namespace) -> Client | None:
     """The world to add the arms to: ``--connect``'s, else the runtime file's if it
-    answers; None for a new world (``--new-world``, or none running)."""
+    answers; None for a new world (``--new-world``, or none running).
+
+    Joining a world prints, first (unless ``--quiet``), which world it is: who else
+    runs it may not be obvious (any process of the same user registers there)."""
     if args.new_world:
         if args.connect is not None:
             raise UsageError("--new-world and --connect exclude each other")
         return None
+    entry: WorldEntry | None = None
     if args.connect is not None:
         client = connect(args.connect, timeout=args.timeout)
     else:
@@ -60,7 +66,43 @@ def running_world(args: argparse.Namespace) -> Client | None:
             f"{', '.join(given)} set options of a new world, but a world is running at "
             f"{client.address}; drop them to add the arms to it, or add --new-world"
         )
+    if not args.quiet:
+        try:
+            print(joining_line(client, entry), flush=True)
+        except BaseException:
+            client.close()
+            raise
     return client
+
+
+def joining_line(client: Client, entry: WorldEntry | None) -> str:
+    """E.g. ``joining the running world at tcp://127.0.0.1:41234 (process 4242, started
+    2026-11-23 05:52:10, 12 min ago; arms: bob, toby); add --new-world for a separate
+    world``. ``entry``: the runtime file's, when the world was found through it."""
+    info = client.info()
+    facts = [f"process {info.pid}"]
+    if entry is None:  # --connect: the runtime file may name the same world
+        entry = runtime_file.live_entry()
+    started = entry.started_at if entry is not None and entry.pid == info.pid else None
+    if started is not None:
+        stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(started))
+        facts.append(f"started {stamp}, {_age(time.time() - started)} ago")
+    arms = ", ".join(info.arms) or "none yet"
+    return (
+        f"joining the running world at {client.address} ({', '.join(facts)}; arms: {arms}); "
+        "add --new-world for a separate world"
+    )
+
+
+def _age(seconds: float) -> str:
+    """``40 s``, ``12 min``, ``3.5 h``, ``2.0 days``."""
+    if seconds < 120:
+        return f"{max(seconds, 0):.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 172800:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
 
 
 def add_to_world(client: Client, spec: FleetSpec, quiet: bool) -> int:

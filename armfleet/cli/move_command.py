@@ -8,6 +8,7 @@ import argparse
 import numpy as np
 
 from armfleet.cli.api_options import add_remote_command, connect_from
+from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import pose_matrix
@@ -48,7 +49,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )  # fmt: skip
     parser.add_argument("--wait", action="store_true", help="return once the arm holds the target")
     parser.add_argument(
-        "--wait-timeout", type=float, default=WAIT_TIMEOUT_S, metavar="S",
+        "--wait-timeout", type=wait_timeout, default=WAIT_TIMEOUT_S, metavar="S",
         help=f"longest wait for the motion with --wait [s] (default {WAIT_TIMEOUT_S:g})",
     )  # fmt: skip
     parser.set_defaults(run=run)

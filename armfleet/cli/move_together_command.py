@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from armfleet.cli.api_options import add_remote_command, connect_from
+from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.remote.remote_arm import WAIT_TIMEOUT_S
 
@@ -25,7 +26,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )  # fmt: skip
     parser.add_argument("--wait", action="store_true", help="return once every arm holds")
     parser.add_argument(
-        "--wait-timeout", type=float, default=WAIT_TIMEOUT_S, metavar="S",
+        "--wait-timeout", type=wait_timeout, default=WAIT_TIMEOUT_S, metavar="S",
         help=f"longest wait per arm with --wait [s] (default {WAIT_TIMEOUT_S:g})",
     )  # fmt: skip
     parser.set_defaults(run=run)

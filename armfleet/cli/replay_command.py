@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import math
 import signal
 import time
 from pathlib import Path
 from types import FrameType
 
+from armfleet.cli.number_arguments import port, replay_speed
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.recording import Recording, ReplayPlayer, export_html, open_recording
 from armfleet.recording.replay import start_replay_viewer
@@ -31,11 +31,11 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help="write the standalone HTML replay (plays from file://) and exit",
     )  # fmt: skip
     parser.add_argument(
-        "--speed", type=float, default=1.0, metavar="X",
+        "--speed", type=replay_speed, default=1.0, metavar="X",
         help="playback speed, times real time (default 1)",
     )  # fmt: skip
     parser.add_argument(
-        "--viewer-port", type=int, default=None, metavar="PORT",
+        "--viewer-port", type=port, default=None, metavar="PORT",
         help="web port of the viewer (default: a free port)",
     )  # fmt: skip
     parser.add_argument(
@@ -47,10 +47,6 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if not (math.isfinite(args.speed) and args.speed > 0):
-        raise UsageError(f"--speed {args.speed} is invalid; give a factor > 0")
-    if args.viewer_port is not None and not 1 <= args.viewer_port <= 65535:
-        raise UsageError(f"--viewer-port {args.viewer_port} is invalid; give 1-65535")
     if args.html is not None:
         target = Path(args.html)
         if target.suffix.lower() != ".html":

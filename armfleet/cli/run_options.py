@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import math
 
-from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.number_arguments import port, run_duration
+from armfleet.cli.parser import OneLineParser
 from armfleet.cli.record_option import HELP, METAVAR, check_record_path
 
 
 def add_run_arguments(parser: OneLineParser) -> None:
     parser.add_argument(
-        "--duration", type=float, default=None, metavar="S",
+        "--duration", type=run_duration, default=None, metavar="S",
         help="simulated seconds to run, then exit (default: until Ctrl-C)",
     )  # fmt: skip
     pacing = parser.add_mutually_exclusive_group()
@@ -25,7 +25,7 @@ def add_run_arguments(parser: OneLineParser) -> None:
     )  # fmt: skip
     parser.add_argument("--no-viewer", action="store_true", help="run headless")
     parser.add_argument(
-        "--viewer-port", type=int, default=None, metavar="PORT",
+        "--viewer-port", type=port, default=None, metavar="PORT",
         help="web port of the viewer (default: a free port)",
     )  # fmt: skip
     parser.add_argument("--record", metavar=METAVAR, default=None, help=HELP)
@@ -33,9 +33,6 @@ def add_run_arguments(parser: OneLineParser) -> None:
 
 
 def check_run_arguments(args: argparse.Namespace) -> None:
-    """Raise :class:`UsageError` for run options that make no sense."""
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration >= 0):
-        raise UsageError(f"--duration {args.duration} is invalid; give seconds >= 0")
+    """Raise :class:`UsageError` for run options that make no sense (the numbers were
+    checked while parsing)."""
     check_record_path(args.record)
-    if args.viewer_port is not None and not 1 <= args.viewer_port <= 65535:
-        raise UsageError(f"--viewer-port {args.viewer_port} is invalid; give 1-65535")

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 
 from armfleet.cli.api_options import add_remote_command, connect_from
-from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.number_arguments import step_count
+from armfleet.cli.parser import OneLineParser
 
 
 def add_parsers(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -18,7 +19,7 @@ def add_parsers(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     add_remote_command(subparsers, "resume", "resume the paused world").set_defaults(run=resume)
     step = add_remote_command(subparsers, "step", "advance the paused world by a few steps")
     step.add_argument(
-        "count", nargs="?", type=int, default=1, metavar="N", help="steps (default 1)"
+        "count", nargs="?", type=step_count, default=1, metavar="N", help="steps (default 1)"
     )
     step.set_defaults(run=step_world)
 
@@ -50,8 +51,6 @@ def resume(args: argparse.Namespace) -> int:
 
 
 def step_world(args: argparse.Namespace) -> int:
-    if args.count < 1:
-        raise UsageError(f"step count {args.count} is invalid; give N >= 1")
     with connect_from(args) as client:
         print(f"t={client.step(args.count):.3f}s")
     return 0

@@ -7,6 +7,7 @@ import math
 from collections.abc import Collection
 from typing import Any
 
+from armfleet.number_ranges import NumberRange
 from armfleet.remote.errors import ProtocolError
 
 _MISSING = object()
@@ -82,6 +83,16 @@ class Arguments:
                 f"[{low:g}, {high:g}]"
             )
         return float(value)
+
+    def in_range(self, key: str, default: Any, valid: NumberRange) -> Any:
+        """A number in one of the ranges of :mod:`armfleet.number_ranges` (the same
+        range the command line checks); ``default`` if absent (required if ``_MISSING``)."""
+        value = self._get(key, default)
+        if value is default:
+            return value
+        if not valid.contains(value):
+            raise ProtocolError(f"{self._service}: {key!r} is {value!r}; give {valid.valid}")
+        return int(value) if valid.integer else float(value)
 
     def flag(self, key: str, default: Any = _MISSING) -> Any:
         """A bool."""

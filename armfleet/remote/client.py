@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import zmq
 
+from armfleet import number_ranges
 from armfleet.errors import ArmfleetError
 from armfleet.messages import FloatArray, JointCommand, Positions
 from armfleet.remote import runtime_file
@@ -79,7 +80,12 @@ class Client:
         return float(self.call("resume")["time_s"])
 
     def step(self, count: int = 1) -> float:
-        """Advance a paused world ``count`` steps; return its simulated time [s]."""
+        """Advance a paused world ``count`` steps; return its simulated time [s].
+
+        Raises:
+            InvalidNumber: ``count`` is not an integer in 1..100000 (nothing is sent).
+        """
+        number_ranges.STEP_COUNT.check(count, "step count")
         timeout = max(self.timeout, 1e-3 * count)
         return float(self.call("step", {"count": count}, timeout)["time_s"])
 
@@ -305,7 +311,9 @@ def connect(address: str | None = None, *, timeout: float = DEFAULT_TIMEOUT_S) -
 
     Raises:
         NoWorldFound: no world runs, or none answers at ``address``.
+        InvalidNumber: ``timeout`` is not in [0.001, 600] s.
     """
+    number_ranges.REQUEST_TIMEOUT_S.check(timeout, "timeout")
     resolved, source = find_world(address)
     client = Client(resolved, timeout)
     try:

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import enum
 
+from armfleet.number_ranges import REQUEST_TIMEOUT_S
+
 #: Bumped on any incompatible change; ``hello`` refuses a client speaking another one.
 PROTOCOL_VERSION = 1
 #: Largest request the server reads; a larger one gets an error reply [bytes].
@@ -41,7 +43,7 @@ MAX_STREAMS = 256
 #: Requests one server keeps in flight at once (waits included).
 MAX_PENDING_REQUESTS = 256
 #: Longest time a request may wait in the world's queue, whatever the client asks [s].
-MAX_REQUEST_TIMEOUT_S = 600.0
+MAX_REQUEST_TIMEOUT_S = REQUEST_TIMEOUT_S.high
 
 
 class Service(enum.Enum):

@@ -7,10 +7,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from armfleet import number_ranges
 from armfleet.errors import ArmfleetError, NoGripper
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
-from armfleet.remote.codec import decode_message
 from armfleet.real_numbers import all_real
+from armfleet.remote.codec import decode_message
 from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.spawn_pose import SpawnPose
 
@@ -132,9 +133,9 @@ class RemoteArm:
             RemoteError: the world refused it (``UnreachablePose``, ``ArmInMotion``,
                 ``UnknownFrame``...); nothing moved and the current motion goes on.
         """
-        values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")
         if isinstance(pose, pin.SE3):
             pose = pose.homogeneous  # the world checks it is a rigid transform
+        values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")
         key = "position" if np.ndim(pose) == 1 else "pose"
         args = {"name": self._name, key: values, "frame": frame, "link": link, "linear": linear}
         return float(self._client.call("move_pose", args)["duration_s"])
@@ -145,7 +146,9 @@ class RemoteArm:
         Raises:
             RemoteError: the arm stopped on a contact, faulted or left the world.
             RequestTimeout: still moving after ``timeout`` [s of wall time].
+            InvalidNumber: ``timeout`` is not in [0, 600] s (nothing is sent).
         """
+        number_ranges.WAIT_TIMEOUT_S.check(timeout, f"{self._name}: wait timeout")
         args = {"name": self._name, "timeout_s": timeout}
         # The world answers within ``timeout``; the margin lets its answer arrive.
         result = self._client.call("wait", args, timeout=timeout + WAIT_REPLY_MARGIN_S)
@@ -166,11 +169,11 @@ class RemoteArm:
 
     def _vector(self, positions: Positions | Any, problem: str | None = None) -> list[float]:
         try:
+            if not all_real(positions):  # not text, bool, complex or None (as in the world)
+                raise ValueError(positions)
             values: list[float] = np.asarray(positions, dtype=float).reshape(-1).tolist()
         except ValueError:
             joints = ", ".join(self._joint_names)
-            if not all_real(positions):  # not text, bool, complex or None (as in the world)
-                raise ValueError(positions)
             problem = problem or f"targets must be numbers, one per joint: {joints}"
             raise ArmfleetError(f"{self._name}: {problem}") from None
         return values

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from armfleet import number_ranges
 from armfleet.messages import GripperMode, GripperState
-from armfleet.remote.codec import decode_message
 from armfleet.real_numbers import real_number
+from armfleet.remote.codec import decode_message
 
 if TYPE_CHECKING:
     from armfleet.remote.client import Client
@@ -60,7 +61,9 @@ class RemoteGripper:
         Raises:
             RemoteError: the arm left the world.
             RequestTimeout: still moving after ``timeout`` [s of wall time].
+            InvalidNumber: ``timeout`` is not in [0, 600] s (nothing is sent).
         """
+        number_ranges.WAIT_TIMEOUT_S.check(timeout, f"{self._arm}: gripper wait timeout")
         args = {"name": self._arm, "timeout_s": timeout, "gripper": True}
         result = self._client.call("wait", args, timeout=timeout + WAIT_REPLY_MARGIN_S)
         return _state(result)
@@ -90,12 +93,12 @@ class RemoteGripper:
         return self.state.mode in (GripperMode.MOVING, GripperMode.CLOSING)
 
     def _grip(self, action: str, width: float | None, force: float | None) -> GripperState:
+        # Text, bool or None are refused here as in the world (InvalidNumber); a number
+        # out of range goes to the world, which names the range.
         args: dict[str, Any] = {"name": self._arm, "action": action}
         if action == "width":
             valid = f"a width in [0, {self._max_width:g}] m"
             args["width"] = real_number(width, f"{self._arm}: gripper width", valid, finite=False)
-        # Text, bool or None are refused here as in the world (InvalidNumber); a number
-        # out of range goes to the world, which names the range.
         if force is not None:
             valid = f"a force in (0, {self._max_force:g}] N"
             args["force"] = real_number(force, f"{self._arm}: gripper force", valid, finite=False)

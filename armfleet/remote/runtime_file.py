@@ -2,14 +2,17 @@
 
 ``$XDG_RUNTIME_DIR/armfleet/world.json`` (or ``~/.cache/armfleet/world.json``),
 mode 0600 in a 0700 folder, holds the address and the process of the world that
-serves it. A file whose process is gone is stale and ignored.
+serves it, and when it started serving. A file whose process is gone is stale and
+ignored.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,16 +42,27 @@ class WorldEntry:
         started: start time of that process (clock ticks since boot; 0 if unknown),
             so that a recycled pid is not mistaken for the world.
         path: the file it was read from.
+        since: when the world started serving [s since the epoch]; None in a file
+            written before it was recorded.
     """
 
     address: str
     pid: int
     started: int
     path: Path
+    since: float | None = None
 
     @property
     def alive(self) -> bool:
         return process_alive(self.pid, self.started)
+
+    @property
+    def started_at(self) -> float | None:
+        """When the world started [s since the epoch]: :attr:`since`, else its process's
+        start; None if neither is known."""
+        if self.since is not None:
+            return self.since
+        return process_start_time(self.started)
 
 
 def process_start(pid: int) -> int:
@@ -60,6 +74,20 @@ def process_start(pid: int) -> int:
     # Field 22, counted after the parenthesised command name (which may hold spaces).
     fields = stat[stat.rfind(")") + 2 :].split()
     return int(fields[19]) if len(fields) > 19 and fields[19].isdigit() else 0
+
+
+def process_start_time(started: int) -> float | None:
+    """A process start in clock ticks since boot (see :func:`process_start`) as seconds
+    since the epoch; None if unknown."""
+    try:
+        boot = next(
+            int(line.split()[1])
+            for line in Path("/proc/stat").read_text().splitlines()
+            if line.startswith("btime ")
+        )
+    except (OSError, StopIteration, ValueError, IndexError):
+        return None
+    return boot + started / os.sysconf("SC_CLK_TCK") if started else None
 
 
 def process_alive(pid: int, started: int = 0) -> bool:
@@ -77,8 +105,13 @@ def read_entry(path: Path | None = None) -> WorldEntry | None:
     path = path or runtime_path()
     try:
         data = json.loads(path.read_text())
-        return WorldEntry(str(data["address"]), int(data["pid"]), int(data.get("started", 0)), path)
-    except (OSError, ValueError, KeyError, TypeError):
+        since = data.get("since")
+        if not (isinstance(since, int | float) and math.isfinite(since)):
+            since = None
+        return WorldEntry(
+            str(data["address"]), int(data["pid"]), int(data.get("started", 0)), path, since
+        )
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None
 
 
@@ -100,7 +133,9 @@ def write_entry(address: str, path: Path | None = None) -> Path | None:
         return None
     path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
     pid = os.getpid()
-    text = json.dumps({"address": address, "pid": pid, "started": process_start(pid)})
+    text = json.dumps(
+        {"address": address, "pid": pid, "started": process_start(pid), "since": time.time()}
+    )
     temporary = path.with_name(f".{path.name}.{pid}")
     descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     with os.fdopen(descriptor, "w") as stream:

@@ -21,6 +21,7 @@ from typing import Any
 import zmq
 
 from armfleet.errors import ArmfleetError
+from armfleet.number_ranges import REQUEST_TIMEOUT_S, WAIT_TIMEOUT_S
 from armfleet.remote import runtime_file
 from armfleet.remote.address import DEFAULT_BIND, bind_endpoint, check_bind_host, is_loopback
 from armfleet.remote.arguments import Arguments
@@ -30,7 +31,6 @@ from armfleet.remote.outbox import Outbox
 from armfleet.remote.pending_requests import PendingRequests
 from armfleet.remote.protocol import (
     HARD_FRAME_LIMIT_BYTES,
-    MAX_REQUEST_TIMEOUT_S,
     PROTOCOL_VERSION,
     TICK_PERIOD_S,
     Service,
@@ -223,9 +223,7 @@ class WorldServer:
             top = Arguments("request", request, _REQUEST_KEYS, label="the request")
             top.integer("id", low=0, high=2**63 - 1)
             service = require_known(top.text("op"))
-            timeout = top.number(
-                "timeout_s", DEFAULT_REQUEST_TIMEOUT_S, low=0.001, high=MAX_REQUEST_TIMEOUT_S
-            )
+            timeout = top.in_range("timeout_s", DEFAULT_REQUEST_TIMEOUT_S, REQUEST_TIMEOUT_S)
             args = Arguments(service.value, request.get("args"), FIELDS[service])
             self._dispatch(peer, request_id, service, args, timeout)
         except ArmfleetError as exc:
@@ -255,7 +253,7 @@ class WorldServer:
             self._pending.submit(peer, request_id, service, subscribe, timeout, register)
         elif service is Service.WAIT:
             name = args.text("name")
-            duration = args.number("timeout_s", timeout, low=0.0, high=MAX_REQUEST_TIMEOUT_S)
+            duration = args.in_range("timeout_s", timeout, WAIT_TIMEOUT_S)
             if args.flag("gripper", False):
                 check, what = self._services.gripper_wait_check(name), f"{name}'s gripper"
             else:

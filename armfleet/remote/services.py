@@ -17,6 +17,7 @@ from armfleet.bus import Subscription
 from armfleet.errors import ArmFault, ArmfleetError, ProtectiveStopError
 from armfleet.launch import spawn_from_spec
 from armfleet.messages import ArmMode, JointCommand
+from armfleet.number_ranges import STEP_COUNT
 from armfleet.remote.arguments import Arguments
 from armfleet.remote.codec import to_wire
 from armfleet.remote.errors import UnknownService, UnknownTopic
@@ -62,7 +63,6 @@ FIELDS: dict[Service, tuple[str, ...]] = {
 }
 #: Simulated time an arm may take to settle on its target once its motion ended [s].
 SETTLE_S = 0.5
-MAX_STEPS_PER_REQUEST = 100_000
 _POSE_KEYS = ("x", "y", "z", "yaw_deg", "roll_deg", "pitch_deg")
 
 
@@ -304,7 +304,7 @@ class WorldServices:
         return resume
 
     def prepare_step(self, args: Arguments) -> Work:
-        count = args.integer("count", 1, low=1, high=MAX_STEPS_PER_REQUEST)
+        count = args.in_range("count", 1, STEP_COUNT)
         run_state, world = self._require_run_state("step"), self._world
 
         def step() -> dict[str, Any]:

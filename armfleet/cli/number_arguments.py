@@ -1,0 +1,63 @@
+"""Argparse ``type=`` checks for the numbers of every command (timeouts, durations, step
+counts, ports, speeds), built from the ranges of :mod:`armfleet.number_ranges`.
+
+A value outside its range stops the command while its arguments are parsed, before it
+connects to a world or sends anything; the one error line names the argument and the
+valid range, e.g. ``argument --wait-timeout: 'nan' is invalid; give seconds in [0, 600]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+
+from armfleet.number_ranges import (
+    PORT,
+    PORT_OR_FREE,
+    REPLAY_SPEED,
+    REQUEST_TIMEOUT_S,
+    RUN_DURATION_S,
+    STEP_COUNT,
+    WAIT_TIMEOUT_S,
+    NumberRange,
+)
+
+
+def number_in(valid: NumberRange) -> Callable[[str], float]:
+    """An argparse ``type=`` that reads a number in ``valid`` or refuses it in one line."""
+
+    def parse(text: str) -> float:
+        try:
+            return valid.parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = valid.meaning  # argparse names the type by it in some messages
+    return parse
+
+
+def integer_in(valid: NumberRange) -> Callable[[str], int]:
+    """Like :func:`number_in`, for a range of integers."""
+    read = number_in(valid)
+
+    def parse(text: str) -> int:
+        return int(read(text))
+
+    parse.__name__ = valid.meaning
+    return parse
+
+
+#: ``--timeout``: a wait for the world's answer [s].
+request_timeout = number_in(REQUEST_TIMEOUT_S)
+#: ``--wait-timeout``: a wait for a motion to finish [s].
+wait_timeout = number_in(WAIT_TIMEOUT_S)
+#: ``--duration``: simulated seconds of a run.
+run_duration = number_in(RUN_DURATION_S)
+#: ``step N``.
+step_count = integer_in(STEP_COUNT)
+#: ``--viewer-port``.
+port = integer_in(PORT)
+#: ``--api-port`` (0: a free one).
+port_or_free = integer_in(PORT_OR_FREE)
+#: ``replay --speed``.
+replay_speed = number_in(REPLAY_SPEED)

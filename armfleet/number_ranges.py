@@ -1,0 +1,102 @@
+"""The ranges of the numbers users give commands and services: timeouts, run durations,
+step counts, ports, replay speeds.
+
+One place for each range, so that the command line (its argument checks), the live
+API (the server's request checks) and the Python client refuse the same values, in
+the same words. A value is valid when it is a finite real number inside its closed
+range (an integer where the range says so); ``nan``, ``inf`` and ``1e308`` never are.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from armfleet.errors import InvalidNumber
+from armfleet.real_numbers import is_real
+
+
+@dataclass(frozen=True)
+class NumberRange:
+    """A closed range ``[low, high]`` of a number a user gives.
+
+    Attributes:
+        low, high: inclusive bounds.
+        meaning: what the number is, with its unit, for messages (``"seconds"``,
+            ``"steps"``).
+        integer: only whole numbers are valid.
+    """
+
+    low: float
+    high: float
+    meaning: str
+    integer: bool = False
+
+    @property
+    def valid(self) -> str:
+        """What a valid value is, e.g. ``seconds in [0, 600]`` or ``steps, an integer in
+        1..100000``."""
+        if self.integer:
+            return f"{self.meaning}, an integer in {self.low:.0f}..{self.high:.0f}"
+        return f"{self.meaning} in [{_shown(self.low)}, {_shown(self.high)}]"
+
+    def contains(self, value: object) -> bool:
+        """Whether ``value`` is a finite real number in the range (a whole one if
+        :attr:`integer`); text, bool and None are not."""
+        if not is_real(value):
+            return False
+        number = float(value)  # type: ignore[arg-type]  # is_real checked it
+        if not (math.isfinite(number) and self.low <= number <= self.high):
+            return False
+        return not self.integer or number.is_integer()
+
+    def check(self, value: object, argument: str) -> float:
+        """``value`` as a float if :meth:`contains` it.
+
+        Args:
+            value: what the user gave.
+            argument: its name in the message (``"timeout"``, ``"step count"``).
+
+        Raises:
+            InvalidNumber: naming ``argument``, the value and the valid range.
+        """
+        if not self.contains(value):
+            raise InvalidNumber(argument, value, self.valid)
+        return float(value)  # type: ignore[arg-type]  # contains() checked it
+
+    def parse(self, text: str) -> float:
+        """A command-line value as a number in the range (int-valued if :attr:`integer`).
+
+        Raises:
+            ValueError: not a number, or outside the range; the message says what is valid.
+        """
+        try:
+            value = int(text, 10) if self.integer else float(text)
+        except ValueError:
+            kind = "an integer" if self.integer else "a number"
+            raise ValueError(f"{text!r} is not {kind}; give {self.valid}") from None
+        if not self.contains(value):
+            raise ValueError(f"{text!r} is invalid; give {self.valid}")
+        return value + 0.0 if not self.integer else value  # -0.0 reads as 0.0
+
+
+def _shown(bound: float) -> str:
+    """``1000000`` rather than ``1e+06``; ``0.001`` as is."""
+    return f"{bound:.0f}" if float(bound).is_integer() and abs(bound) < 1e9 else f"{bound:g}"
+
+
+#: A wait for the world's answer to one request, and the longest a request may wait
+#: in the world's queue, whatever the client asks [s].
+REQUEST_TIMEOUT_S = NumberRange(0.001, 600.0, "seconds")
+#: A wait for an arm (or a gripper) to finish its motion [s].
+WAIT_TIMEOUT_S = NumberRange(0.0, 600.0, "seconds")
+#: Simulated time a command-line run lasts (longer: no --duration, run until Ctrl-C) [s].
+RUN_DURATION_S = NumberRange(0.0, 1e6, "seconds")
+#: Steps one ``step`` request advances a paused world.
+STEP_COUNT = NumberRange(1, 100_000, "steps", integer=True)
+#: A TCP port given by the user.
+PORT = NumberRange(1, 65535, "a TCP port", integer=True)
+#: A TCP port, or 0 for a free one.
+PORT_OR_FREE = NumberRange(0, 65535, "a TCP port (0: a free one)", integer=True)
+#: Replay speed, times real time.
+REPLAY_SPEED = NumberRange(0.001, 1000.0, "a factor (times real time)")

@@ -1,0 +1,384 @@
+"""Bad input on the command line (issue #14, items 5, 17, 18): every mistake is one line on
+stderr, exit code 2, no traceback, and the world it was aimed at is untouched.
+
+The commands run as real subprocesses against a world running in another process
+(bob, a Panda at home, fingers at 0.04 m), in a private runtime folder. "Untouched"
+means, once every bad command has ended: the world still steps, has the same arms and
+no objects, bob holds within 2e-3 rad of home (a move a bad command let through goes
+to a target 0.5 rad away and is over long before the check) and his fingers are within
+0.5 mm of 0.04 m (a close that got through leaves them shut). Also here: the status
+line's summary beyond the terminal's width, the closing line of a --duration run, and
+the first line of a spawn that joins a running world.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import time
+from collections import Counter
+from collections.abc import Iterator
+from datetime import datetime
+from pathlib import Path
+from typing import cast
+
+import numpy as np
+import pytest
+
+import armfleet
+from armfleet.cli.status_line import status_line
+from armfleet.errors import InvalidNumber
+from armfleet.messages import ArmMode
+from tests.remote_world import ARMFLEET, WorldProcess, cli, runtime_env, wait_until
+
+HOME = "0,-0.785,0,-2.356,0,1.571,0.785"
+PANDA_HOME = [float(v) for v in HOME.split(",")]
+#: A target 0.5 rad from home on joint 1: a move that got through ends far from home.
+AWAY = ["0.5", *HOME.split(",")[1:]]
+#: A settled arm stays this close to its target [rad] (the CLI tests' holding figure).
+HOLD_TOLERANCE_RAD = 2e-3
+#: Fingers at rest stay this close to their width [m].
+WIDTH_TOLERANCE_M = 5e-4
+START_WIDTH_M = 0.04
+#: Commands started at once (each only parses, or fails at its first request).
+BATCH = 6
+
+WAIT_RANGE = "give seconds in [0, 600]"
+TIMEOUT_RANGE = "give seconds in [0.001, 600]"
+STEP_RANGE = "give steps, an integer in 1..100000"
+
+
+BAD = [
+    # -- numbers at the edges: refused while parsing, before anything is sent ------------
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--wait", "--wait-timeout", "nan"],
+        ["argument --wait-timeout: 'nan' is invalid", WAIT_RANGE],
+        id="move --wait-timeout nan -> refused before the arm moves",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--wait", "--wait-timeout", "1e308"],
+        ["argument --wait-timeout: '1e308' is invalid", WAIT_RANGE],
+        id="move --wait-timeout 1e308 -> refused before the arm moves",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--wait", "--wait-timeout", "-1"],
+        ["argument --wait-timeout: '-1' is invalid", WAIT_RANGE],
+        id="move --wait-timeout -1 -> refused before the arm moves (not after)",
+    ),
+    pytest.param(
+        ["move-together", f"bob={','.join(AWAY)}", "--wait", "--wait-timeout", "-inf"],
+        ["argument --wait-timeout: '-inf' is invalid", WAIT_RANGE],
+        id="move-together --wait-timeout -inf -> refused before the arm moves",
+    ),
+    pytest.param(
+        ["grip", "bob", "close", "--wait", "--wait-timeout", "inf"],
+        ["argument --wait-timeout: 'inf' is invalid", WAIT_RANGE],
+        id="grip --wait-timeout inf -> refused before the fingers close",
+    ),
+    pytest.param(
+        ["info", "--timeout", "1e308"],
+        ["argument --timeout: '1e308' is invalid", TIMEOUT_RANGE],
+        id="--timeout 1e308 -> one line, not an OverflowError",
+    ),
+    pytest.param(
+        ["arms", "--timeout", "-0"],
+        ["argument --timeout: '-0' is invalid", TIMEOUT_RANGE],
+        id="--timeout -0 -> refused",
+    ),
+    pytest.param(
+        ["info", "--timeout", "soon"],
+        ["argument --timeout: 'soon' is not a number", TIMEOUT_RANGE],
+        id="--timeout text -> not a number, with the range",
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,1.5", "--timeout", "1e308"],
+        ["argument --timeout: '1e308' is invalid", TIMEOUT_RANGE],
+        id="spawn into the running world with --timeout 1e308 -> no arm added",
+    ),
+    pytest.param(
+        ["step", "1000000000000"],
+        ["argument N: '1000000000000' is invalid", STEP_RANGE],
+        id="step 1e12 -> refused, not an OverflowError",
+    ),
+    pytest.param(
+        ["step", "2.5"],
+        ["argument N: '2.5' is not an integer", STEP_RANGE],
+        id="step 2.5 -> not an integer",
+    ),
+    pytest.param(["step", "0"], ["argument N: '0' is invalid", STEP_RANGE], id="step 0 -> refused"),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,0", "--new-world", "--duration", "1e308"],
+        ["argument --duration: '1e308' is invalid", "give seconds in [0, 1000000]"],
+        id="--duration 1e308 -> refused (would never end)",
+    ),
+    pytest.param(
+        ["launch", "bob_and_toby", "--check", "--duration", "nan"],
+        ["argument --duration: 'nan' is invalid", "give seconds in [0, 1000000]"],
+        id="launch --check --duration nan -> refused",
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,0", "--new-world", "--api-port", "99999999999999999999"],
+        ["argument --api-port: '99999999999999999999' is invalid", "integer in 0..65535"],
+        id="--api-port huge int -> refused",
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,0", "--new-world", "--viewer-port", "0"],
+        ["argument --viewer-port: '0' is invalid", "integer in 1..65535"],
+        id="--viewer-port 0 -> refused",
+    ),
+    pytest.param(
+        ["replay", "run.mcap", "--speed", "inf"],
+        ["argument --speed: 'inf' is invalid", "in [0.001, 1000]"],
+        id="replay --speed inf -> refused before the file is read",
+    ),
+    # -- names and lists --------------------------------------------------------------------
+    pytest.param(
+        ["spwan", "carl", "--at", "0,1.5"],
+        ["invalid choice: 'spwan'; did you mean 'spawn'?", "'move-together'"],
+        id="misspelt command -> did you mean, and the commands",
+    ),
+    pytest.param(
+        ["add-object", "cup", "sphre", "--size", "0.03"],
+        ["invalid choice: 'sphre'; did you mean 'sphere'?", "'box', 'cylinder', 'sphere'"],
+        id="misspelt shape -> did you mean, and the shapes",
+    ),
+    pytest.param(
+        ["spawn", "--at", "0,1.5", "carl"],
+        ["--at took 'carl' as a position", "'armfleet spawn carl --at 0,1.5'"],
+        id="names after --at -> --at took them, put them first",
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,1.5", "dave"],
+        ["--at took 'dave' as a position", "'armfleet spawn carl dave --at 0,1.5'"],
+        id="one name after --at -> --at took it, not a count mismatch",
+    ),
+    pytest.param(
+        ["spawn", "carl", "dave", "--at", "0,1.5"],
+        ["got 2 names but 1 --at poses"],
+        id="fewer --at poses than names -> counts named",
+    ),
+    pytest.param(
+        ["move", "", "--joints", *AWAY], ["no arm named ''; arms: bob"], id="empty arm name"
+    ),
+    pytest.param(
+        ["info", "--connect", ""], ["address '' is malformed"], id="empty --connect address"
+    ),
+]
+
+
+def run_all(runtime: Path, invocations: list[list[str]]) -> list[subprocess.CompletedProcess[str]]:
+    """Run the commands, a few at a time (two cores are shared)."""
+    results: list[subprocess.CompletedProcess[str]] = []
+    for start in range(0, len(invocations), BATCH):
+        processes = [
+            subprocess.Popen(
+                [*ARMFLEET, *args],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=runtime_env(runtime),
+            )
+            for args in invocations[start : start + BATCH]
+        ]
+        for process in processes:
+            stdout, stderr = process.communicate(timeout=120)
+            results.append(
+                subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
+            )
+    return results
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory: pytest.TempPathFactory) -> Iterator[WorldProcess]:
+    """bob, a Panda, in a world running in real time in another process."""
+    with WorldProcess(
+        tmp_path_factory.mktemp("runtime"), "bob", "--at", "0,0", "--no-viewer", "--realtime"
+    ) as process:
+        yield process
+
+
+@pytest.fixture(scope="module")
+def bad_runs(world: WorldProcess) -> dict[str, subprocess.CompletedProcess[str]]:
+    """Every bad invocation, once bob holds home with his fingers at 0.04 m."""
+    home = cli(world.runtime_dir, "move", "bob", "--joints", *HOME.split(","), "--wait")
+    assert home.returncode == 0, home.stderr
+    with armfleet.connect(world.address) as client:
+        assert abs(client.arm("bob").gripper.width - START_WIDTH_M) < WIDTH_TOLERANCE_M
+    invocations = [cast(list[str], param.values[0]) for param in BAD]
+    results = run_all(world.runtime_dir, invocations)
+    return {str(param.id): result for param, result in zip(BAD, results, strict=True)}
+
+
+@pytest.mark.parametrize(("args", "fragments"), BAD)
+def test_a_bad_command_is_one_line_and_exit_2(
+    bad_runs: dict[str, subprocess.CompletedProcess[str]],
+    request: pytest.FixtureRequest,
+    args: list[str],
+    fragments: list[str],
+) -> None:
+    result = bad_runs[request.node.callspec.id]
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stdout == ""  # nothing was done, nothing to report
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("armfleet: error: ")
+    for fragment in fragments:
+        assert fragment in lines[0]
+
+
+def test_after_the_bad_commands_the_world_is_untouched(
+    bad_runs: dict[str, subprocess.CompletedProcess[str]], world: WorldProcess
+) -> None:
+    with armfleet.connect(world.address) as client:
+        start = client.info().time_s
+        assert wait_until(lambda: client.info().time_s > start + 0.01)  # still stepping
+        assert list(client.arms) == ["bob"]
+        assert client.objects == {}
+        bob = client.arm("bob")
+        assert bob.mode is armfleet.ArmMode.HOLDING
+        assert np.abs(bob.positions - PANDA_HOME).max() < HOLD_TOLERANCE_RAD
+        assert abs(bob.gripper.width - START_WIDTH_M) < WIDTH_TOLERANCE_M
+        assert client.info().streams == 0
+
+
+# -- the same ranges in the live API and the Python client ------------------------------------
+
+
+def test_the_world_refuses_what_the_command_line_refuses(world: WorldProcess) -> None:
+    """A client that skips the CLI (a raw request) meets the same ranges at the server."""
+    with armfleet.connect(world.address) as client:
+        for op, args, expected in (
+            ("wait", {"name": "bob", "timeout_s": float("nan")}, WAIT_RANGE),
+            ("wait", {"name": "bob", "timeout_s": 1e308}, WAIT_RANGE),
+            ("step", {"count": 10**12}, STEP_RANGE),
+            ("step", {"count": 2.5}, STEP_RANGE),
+        ):
+            with pytest.raises(armfleet.ArmfleetError, match=re.escape(expected)):
+                client.call(op, args)
+        bob = client.arm("bob")
+        for bad in (float("nan"), 1e308, -1.0):
+            with pytest.raises(InvalidNumber, match=re.escape("bob: wait timeout")):
+                bob.wait(bad)
+            with pytest.raises(InvalidNumber, match=re.escape("bob: gripper wait timeout")):
+                bob.gripper.wait(bad)
+        with pytest.raises(InvalidNumber, match=re.escape("step count = 1000000000000")):
+            client.step(10**12)
+    with pytest.raises(InvalidNumber, match=re.escape("timeout = 1e+308 is invalid")):
+        armfleet.connect(world.address, timeout=1e308)
+
+
+# -- item 18: a spawn that joins says which world ----------------------------------------------
+
+JOIN_LINE = re.compile(
+    r"^joining the running world at (?P<address>\S+) \(process (?P<pid>\d+), started "
+    r"(?P<started>\d{4}-\d\d-\d\d \d\d:\d\d:\d\d), [0-9.]+ (s|min|h|days) ago; "
+    r"arms: (?P<arms>[a-z0-9_, ]+)\); add --new-world for a separate world$"
+)
+
+
+def test_a_spawn_that_joins_says_which_world_first(tmp_path: Path) -> None:
+    before = time.time()
+    with WorldProcess(tmp_path, "bob", "--at", "0,0", "--no-viewer", "--fast") as world:
+        after = time.time()
+        result = cli(tmp_path, "spawn", "carl", "--at", "0,1.5")
+        assert result.returncode == 0, result.stderr
+        first = result.stdout.splitlines()[0]
+        match = JOIN_LINE.match(first)
+        assert match, first
+        assert match["address"] == world.address
+        assert int(match["pid"]) == world.pid
+        assert match["arms"] == "bob"  # the world as it was: carl not yet there
+        started = datetime.strptime(match["started"], "%Y-%m-%d %H:%M:%S").timestamp()
+        # Printed to the second, in local time: between our launch and its "api:" line.
+        assert before - 1 <= started <= after + 1
+        with armfleet.connect(world.address) as client:
+            assert list(client.arms) == ["bob", "carl"]
+        # A new world says nothing of the sort.
+        separate = cli(tmp_path, "spawn", "dave", "--at", "0,0", "--new-world", "--duration", "0")
+        assert separate.returncode == 0, separate.stderr
+        assert "joining" not in separate.stdout
+
+
+# -- item 17: status summary beyond the terminal's width, closing line --------------------------
+
+
+@pytest.fixture(scope="module")
+def fleet() -> Iterator[armfleet.World]:
+    """30 Pandas on a 1 m grid: 2 stopped, 1 moving, the rest holding."""
+    with armfleet.World() as world:
+        arms = [world.spawn(f"arm{i:02d}", at=(i % 6, i // 6)) for i in range(30)]
+        arms[4].position_controller.protective_stop("touched ground")
+        arms[17].position_controller.protective_stop("touched arm16")
+        target = arms[9].positions.copy()
+        target[0] += 0.5
+        arms[9].move_to(target)
+        world.run(0.05)
+        yield world
+
+
+def test_thirty_arms_are_summarised_within_the_width(fleet: armfleet.World) -> None:
+    modes = Counter(arm.status(fleet.time).mode for arm in fleet.arms.values())
+    assert modes == {ArmMode.HOLDING: 27, ArmMode.MOVING: 1, ArmMode.PROTECTIVE_STOP: 2}
+    full = status_line(fleet, 1.0, width=100_000)
+    assert len(full) > 1500  # the issue's 1,900-character line
+    line = status_line(fleet, 1.0, width=150)
+    assert len(line) <= 150, line
+    head, counts, attention = line.split(" | ")
+    assert head == full.split(" | ")[0]
+    assert counts == "30 arms: 27 holding, 1 moving, 2 protective stop"
+    assert attention == "attention: arm04 STOP(touched ground), arm17 STOP(touched arm16)"
+
+
+@pytest.mark.parametrize("width", [130, 100])
+def test_arms_needing_attention_beyond_the_width_are_counted(
+    fleet: armfleet.World, width: int
+) -> None:
+    line = status_line(fleet, 1.0, width=width)
+    assert len(line) <= width, line
+    assert " | 30 arms: 27 holding, 1 moving, 2 protective stop | attention: " in line
+    attention = line.split(" | attention: ")[1]
+    shown = re.findall(r"arm\d\d STOP\([^)]*\)", attention)
+    hidden = re.fullmatch(r"(.*, )?\+(?P<n>\d+) more|(?P<all>\d+) arms", attention)
+    assert hidden, attention
+    # Every stopped arm is named or counted, never both.
+    assert len(shown) + int(hidden["n"] or hidden["all"]) == 2
+
+
+def test_a_duration_run_summarises_in_a_pipe_and_ends_with_a_closing_line(
+    tmp_path: Path,
+) -> None:
+    """Output to a pipe is taken as 100 columns; four arms' full line is wider."""
+    env = {key: value for key, value in runtime_env(tmp_path).items() if key != "COLUMNS"}
+    names = ["a", "b", "c", "d"]
+    result = subprocess.run(
+        [*ARMFLEET, "spawn", *names, "--at", "0,0", "1,0", "2,0", "3,0", "--no-viewer",
+         "--realtime", "--duration", "1.2"],
+        capture_output=True, text=True, timeout=120, env=env,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    status = [line for line in lines if line.startswith("t=")]
+    assert status, result.stdout  # 1.2 s in real time: at least one status line
+    for line in status:
+        assert len(line) <= 100, line
+        assert line.endswith(" | 4 arms: 4 holding"), line
+    closing = re.match(
+        r"^ran --duration 1\.2 s \(t=(?P<t>[0-9.]+)s, [0-9.]+ s wall in all\); shut down "
+        r"cleanly$",
+        lines[-1],
+    )
+    assert closing, lines[-1]
+    assert float(closing["t"]) >= 1.2
+
+
+def test_status_lines_that_fit_stay_per_arm(tmp_path: Path) -> None:
+    result = subprocess.run(
+        [*ARMFLEET, "spawn", "a", "--at", "0,0", "--no-viewer", "--realtime", "--duration", "1.2"],
+        capture_output=True, text=True, timeout=120,
+        env=runtime_env(tmp_path) | {"COLUMNS": "200"},
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    status = [line for line in result.stdout.splitlines() if line.startswith("t=")]
+    assert status, result.stdout
+    assert all(re.search(r" \| a holding q=\[[-+0-9. ]+\]$", line) for line in status), status
