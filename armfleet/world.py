@@ -37,6 +37,7 @@ from armfleet.messages import (
     Positions,
 )
 from armfleet.names import check_arm_name
+from armfleet.number_ranges import PORT
 from armfleet.objects import ObjectSet, WorldObject, object_spec
 from armfleet.objects.object_spec import (
     DEFAULT_COLOR,
@@ -75,7 +76,7 @@ class World:
         models: library of arm models; armfleet's ``description/`` by default.
         viewer: start a MeshCat viewer (``world.viewer.url``); if it cannot
             start, the world runs without it and the reason is logged.
-        viewer_port: web port of the viewer; a free one by default.
+        viewer_port: web port of the viewer (1..65535); a free one by default.
     """
 
     def __init__(
@@ -88,6 +89,8 @@ class World:
         viewer_port: int | None = None,
     ) -> None:
         dt = check_dt(dt)
+        if viewer_port is not None:
+            PORT.check(viewer_port, "viewer_port")  # as the CLI's --viewer-port
         gravity = real_number(gravity, "gravity", "[-100, 100] m/s^2", low=-100.0, high=100.0)
         self._dt = dt
         self._client: int = p.connect(p.DIRECT)

@@ -329,6 +329,11 @@ def test_bad_types_are_refused_in_one_line_and_the_world_untouched(
         pytest.param(
             {"gravity": "9.81"}, "gravity = '9.81' is invalid", id="gravity '9.81' -> InvalidNumber"
         ),
+        pytest.param(
+            {"viewer": True, "viewer_port": "8080"},
+            "viewer_port = '8080' is invalid",
+            id="viewer_port '8080' -> InvalidNumber before any viewer starts",
+        ),
     ],
 )
 def test_bad_world_settings_are_refused_before_any_world_exists(
@@ -339,8 +344,12 @@ def test_bad_world_settings_are_refused_before_any_world_exists(
     message = str(caught.value)
     assert "\n" not in message
     assert expected in message
-    valid = "[-100, 100] m/s^2" if "gravity" in arguments else f"[1e-05, {MAX_DT_S:g}] s"
-    assert valid in message
+    valid = {
+        "dt": f"[1e-05, {MAX_DT_S:g}] s",
+        "gravity": "[-100, 100] m/s^2",
+        "viewer_port": "a TCP port, an integer in 1..65535",
+    }
+    assert valid[next(key for key in valid if key in arguments)] in message
 
 
 class ArrayLike:
