@@ -37,7 +37,7 @@ from armfleet.messages import (
     Positions,
 )
 from armfleet.names import check_arm_name
-from armfleet.number_ranges import PORT
+from armfleet.number_ranges import PORT, RUN_DURATION_S
 from armfleet.objects import ObjectSet, WorldObject, object_spec
 from armfleet.objects.object_spec import (
     DEFAULT_COLOR,
@@ -464,11 +464,11 @@ class World:
         """Advance ``duration`` seconds of simulated time.
 
         Args:
-            duration: simulated time to advance [s].
+            duration: simulated time to advance [s], in [0, 1e6]: longer is a typo.
             realtime: pace the steps to the wall clock instead of running flat out.
             on_step: called after every step (e.g. for logging).
         """
-        duration = real_number(duration, "duration", "a finite time >= 0 s", low=0.0)
+        duration = RUN_DURATION_S.check(duration, "duration")  # as the CLI's --duration
         steps = round(duration / self._dt)
         wall_start, sim_start = time.perf_counter(), self.time
         for _ in range(steps):

@@ -185,7 +185,7 @@ CASES = [
     # -- running, recording --------------------------------------------------------------
     case(
         lambda w, b: w.run("1"),
-        InvalidNumber, "duration = '1' is invalid", "a finite time >= 0 s",
+        InvalidNumber, "duration = '1' is invalid", "seconds in [0, 1000000]",
         id="run '1' -> InvalidNumber, not TypeError",
     ),
     case(
@@ -197,6 +197,11 @@ CASES = [
         lambda w, b: w.run(None),
         InvalidNumber, "duration = None is invalid",
         id="run None -> InvalidNumber, not TypeError",
+    ),
+    case(
+        lambda w, b: w.run(1e308),
+        InvalidNumber, "duration = 1e+308 is invalid", "seconds in [0, 1000000]",
+        id="run 1e308 s -> InvalidNumber, not OverflowError",
     ),
     case(
         lambda w, b: w.record(5),
