@@ -162,6 +162,22 @@ BAD_SPECS = [
         id="a 5,000-digit number -> refused at its line, value cut short",
     ),
     pytest.param(
+        BadSpec(
+            ("arms:\n  - name: bob\n    model: " + "m" * 500_000 + "\n").encode(),
+            3,
+            ("arms[0].model:", "(500002 characters) is longer than 4096 characters"),
+        ),
+        id="a 500,000-character model name -> refused, echoed cut short",
+    ),
+    pytest.param(
+        BadSpec(
+            ("world:\n  realtime: " + "y" * 500_000 + "\n").encode(),
+            2,
+            ("world.realtime: expected true or false, got 'yyy", "(500002 characters)"),
+        ),
+        id="a 500,000-character switch value -> refused, echoed cut short",
+    ),
+    pytest.param(
         BadSpec(b"world:\n  dt_s: 2001-02-30\n", 2, ("cannot read '2001-02-30'",)),
         id="an impossible date -> refused at its line",
     ),
@@ -196,6 +212,7 @@ def write_case(folder: Path, case: BadSpec) -> Path:
 
 def check_message(message: str, spec: Path, case: BadSpec) -> None:
     assert "\n" not in message.strip()
+    assert len(message) < len(str(spec)) + 300  # no echo of a huge value
     assert "Traceback" not in message
     where = f"{spec}:{case.line}: " if case.line else f"{spec}: "
     assert where in message, message

@@ -11,6 +11,10 @@ from armfleet.located_yaml import LocatedDict, LocatedList
 from armfleet.spec.spec_error import SpecError
 
 _MISSING = object()
+#: Longest text a spec field takes (a path can be 4096 bytes long on Linux) [characters].
+MAX_TEXT_CHARS = 4096
+#: Longest value repeated in an error message; longer ones are cut [characters].
+SHOWN_CHARS = 40
 
 
 class SpecReader:
@@ -65,14 +69,18 @@ class SpecReader:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(*where, f"expected a number{_in(unit)}, got {_kind(value)}")
         if not math.isfinite(value) or not lower <= value <= upper:
-            raise self.error(*where, f"{value} is outside [{lower:g}, {upper:g}]{_in(unit)}")
+            raise self.error(
+                *where, f"{_shown(value)} is outside [{lower:g}, {upper:g}]{_in(unit)}"
+            )
         return float(value)
 
     def boolean(self, mapping: LocatedDict, key: str, field: str, default: bool) -> bool:
         value = mapping.get(key, default)
         if not isinstance(value, bool):
             raise self.error(
-                mapping.line_of(key), _join(field, key), f"expected true or false, got {value!r}"
+                mapping.line_of(key),
+                _join(field, key),
+                f"expected true or false, got {_kind(value)}",
             )
         return value
 
@@ -85,6 +93,12 @@ class SpecReader:
         if not isinstance(value, str):
             raise self.error(
                 mapping.line_of(key), _join(field, key), f"expected text, got {_kind(value)}"
+            )
+        if len(value) > MAX_TEXT_CHARS:
+            raise self.error(
+                mapping.line_of(key),
+                _join(field, key),
+                f"{_shown(value)} is longer than {MAX_TEXT_CHARS} characters",
             )
         return value
 
@@ -117,4 +131,12 @@ def _kind(value: Any) -> str:
         return "a mapping"
     if isinstance(value, list):
         return "a list"
-    return repr(value)
+    return _shown(value)
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)``, cut short (a spec may hold a megabyte of text in one value)."""
+    text = repr(value)
+    if len(text) <= SHOWN_CHARS:
+        return text
+    return f"{text[: SHOWN_CHARS - 16]}... ({len(text)} characters)"
