@@ -315,6 +315,42 @@ def test_info_on_a_damaged_file_is_one_line_exit_2(killed: Killed, case: BadFile
         assert text in result.stderr, result.stderr
 
 
+@pytest.fixture(scope="module")
+def complete(killed: Killed) -> bytes:
+    """The bytes of a complete recording (the killed one, recovered)."""
+    out = killed.folder / "complete.mcap"
+    assert armfleet("recover", str(killed.path), "-o", str(out), cwd=killed.folder).returncode == 0
+    return out.read_bytes()
+
+
+def test_a_complete_file_whose_index_points_nowhere_is_damaged(
+    killed: Killed, complete: bytes
+) -> None:
+    """The summary reads, but the first chunk it names is not there: info says so."""
+    offset = chunks(complete)[0][0]
+    bad = killed.folder / "bad-index.mcap"
+    bad.write_bytes(flip(complete, offset))  # the chunk's opcode byte
+    result = armfleet("info", str(bad), cwd=killed.folder)
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.count("\n") == 1
+    assert f"is damaged: its index names a chunk at byte {offset}, where none is" in result.stderr
+
+
+def test_a_complete_file_with_a_bad_chunk_is_refused_when_read(
+    killed: Killed, complete: bytes
+) -> None:
+    """A byte flipped in compressed data passes the index check; reading the messages
+    (replay, plot) meets it and stops with one line, naming recover."""
+    bad = killed.folder / "bad-chunk.mcap"
+    bad.write_bytes(flip(complete, inside_second_chunk(complete)))
+    html = killed.folder / "bad-chunk.html"
+    result = armfleet("replay", str(bad), "--html", str(html), "--quiet", cwd=killed.folder)
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert "is damaged: a chunk cannot be read" in result.stderr
+    assert f"'armfleet recover {bad}' saves the messages before it" in result.stderr
+
+
 def test_recover_keeps_what_precedes_damage(killed: Killed) -> None:
     """A flipped byte in the second chunk: the messages of the first are saved, as many as
     the official reader (checking CRCs) yields before it fails."""

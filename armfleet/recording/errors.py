@@ -40,16 +40,18 @@ class DamagedRecording(RecordingError):
     Attributes:
         path: the file.
         reason: what is wrong and where, e.g. ``a record of unknown type 0x5c at byte 31``.
-        messages_before: whole messages before the damage (what ``armfleet recover`` keeps).
+        messages_before: whole messages before the damage (what ``armfleet recover``
+            keeps); None if not counted.
     """
 
-    def __init__(self, path: Path, reason: str, messages_before: int) -> None:
+    def __init__(self, path: Path, reason: str, messages_before: int | None) -> None:
         self.path = path
         self.reason = reason
         self.messages_before = messages_before
-        rescue = (
-            f"'armfleet recover {path}' saves the {messages_before} messages before it"
-            if messages_before
-            else "no message precedes it"
-        )
+        if messages_before is None:
+            rescue = f"'armfleet recover {path}' saves the messages before it"
+        elif messages_before:
+            rescue = f"'armfleet recover {path}' saves the {messages_before} messages before it"
+        else:
+            rescue = "no message precedes it"
         super().__init__(f"{path} is damaged: {reason}; {rescue}")

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mcap.opcode import Opcode
 from mcap.reader import SeekingReader
 from mcap.records import Attachment, Channel, Message, Metadata, Schema
 from mcap.summary import Summary
@@ -41,6 +42,7 @@ from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan, Scan
 from armfleet.recording.recorder import SPEC_ATTACHMENT
 
 NS_PER_S = 1e9
+CHUNK_OPCODE = bytes([Opcode.CHUNK])
 
 
 @dataclass(frozen=True)
@@ -170,13 +172,13 @@ class Recording:
         wanted = None if topics is None else set(topics)
         if self._summary is not None:
             with self.path.open("rb") as stream:
-                reader = SeekingReader(stream)
+                reader = SeekingReader(stream, validate_crcs=True)
                 try:
                     for _, channel, message in reader.iter_messages(topics=wanted):
                         yield channel.topic, message.log_time, message.data
                 except Exception as exc:  # a chunk the summary points at cannot be read
                     reason = f"a chunk cannot be read ({type(exc).__name__}: {exc})"
-                    raise DamagedRecording(self.path, reason, 0) from None
+                    raise DamagedRecording(self.path, reason, None) from None
             return
         channels: dict[int, Channel] = {}
         for record in RecordScan(self.path):
@@ -228,6 +230,7 @@ class Recording:
             return None
 
     def _from_summary(self, summary: Summary) -> _Contents:
+        _check_chunk_index(self.path, summary)
         statistics = summary.statistics
         with self.path.open("rb") as stream:
             reader = SeekingReader(stream)
@@ -292,6 +295,20 @@ def _check_magic(path: Path) -> None:
         raise NotARecording(path, "the file is empty")
     if head != MCAP_MAGIC:
         raise NotARecording(path, "it does not start with the MCAP magic bytes")
+
+
+def _check_chunk_index(path: Path, summary: Summary) -> None:
+    """Raise DamagedRecording unless every chunk the index names starts where it says
+    (one byte read per chunk: it catches a mangled index or data section, not a byte
+    flipped inside a chunk's compressed data, which reading the messages finds)."""
+    size = path.stat().st_size
+    with path.open("rb") as stream:
+        for index in summary.chunk_indexes:
+            start, length = index.chunk_start_offset, index.chunk_length
+            stream.seek(start)
+            if start + length > size or stream.read(1) != CHUNK_OPCODE:
+                reason = f"its index names a chunk at byte {start}, where none is"
+                raise DamagedRecording(path, reason, None)
 
 
 def _refuse_damage(path: Path, result: ScanResult) -> None:
