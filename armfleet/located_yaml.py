@@ -21,6 +21,7 @@ Every such problem is a :class:`YamlDocumentError` carrying the line and the pro
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -89,6 +90,15 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 class _LocatingLoader(_SAFE_LOADER):  # type: ignore[misc,valid-type]
     """A safe loader (no arbitrary objects) whose mappings and sequences know their lines."""
+
+
+# YAML 1.1 (PyYAML) reads an exponent without a dot, ``1e-5``, as text; YAML 1.2, Python
+# and the error messages that print such bounds (``[1e-05, 0.002]``) read a number.
+_LocatingLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
 
 
 def _construct_mapping(loader: _LocatingLoader, node: yaml.MappingNode) -> LocatedDict:

@@ -387,12 +387,13 @@ def test_a_model_library_that_is_not_one_is_refused() -> None:
 
 
 def spec_with_dt(dt: float) -> str:
-    # Fixed-point: PyYAML reads "1e-05" (no dot) as text.
-    return f"world:\n  dt_s: {dt:.7f}\narms:\n  - name: bob\n    model: panda\n"
+    # As the messages print it: "1e-05", which YAML 1.1 alone would read as text.
+    return f"world:\n  dt_s: {dt:g}\narms:\n  - name: bob\n    model: panda\n"
 
 
 def test_world_and_spec_take_the_same_steps() -> None:
-    """One range: the bounds are valid for both, just outside them neither."""
+    """One range: the bounds are valid for both, just outside them neither, written in a
+    spec as the error message prints them."""
     for dt in (MIN_DT_S, MAX_DT_S):
         assert parse_spec(spec_with_dt(dt), "inline").world.dt_s == dt
         with armfleet.World(dt=dt) as world:
