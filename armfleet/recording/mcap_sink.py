@@ -4,8 +4,9 @@ Memory stays bounded: messages wait in a short batch, then go into the
 writer's current chunk, which is compressed and written out (and flushed to
 the operating system) whenever it reaches :data:`CHUNK_BYTES`. A crash loses at
 most the chunk in progress; the file up to there reads back (see
-:mod:`armfleet.recording.reader`). :meth:`McapSink.close` writes the summary
-(index, statistics) that makes the file complete.
+:mod:`armfleet.recording.reader`), and ``armfleet recover`` makes it complete for
+other MCAP readers (:mod:`armfleet.recording.recover`). :meth:`McapSink.close`
+writes the summary (index, statistics) that makes the file complete.
 
 Every call into the writer runs with Ctrl-C held (:func:`deferred_interrupts`),
 so an interrupt never leaves a half-written record behind.

@@ -20,10 +20,10 @@ from __future__ import annotations
 import enum
 import io
 import struct
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
@@ -113,55 +113,50 @@ class RecordScan:
         self.result: ScanResult | None = None
 
     def __iter__(self) -> Iterator[McapRecord]:
-        messages, offset, has_header = 0, 0, False
-
-        def stop(end: FileEnd, reason: str = "") -> None:
-            self.result = ScanResult(end, offset, reason, has_header, messages)
-
         with self.path.open("rb") as stream:
-            stream.seek(0, io.SEEK_END)
-            size = stream.tell()
-            stream.seek(0)
-            if stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
-                return stop(FileEnd.DAMAGED, "it does not start with the MCAP magic bytes")
-            offset = len(MCAP_MAGIC)
-            while True:
-                head = stream.read(_RECORD_HEAD.size)
-                if len(head) < _RECORD_HEAD.size:
-                    return stop(FileEnd.CUT)
-                opcode, length = _RECORD_HEAD.unpack(head)
-                problem = _implausible(opcode, length, has_header)
-                if problem:
-                    return stop(FileEnd.DAMAGED, f"{problem} at byte {offset}")
-                if offset + _RECORD_HEAD.size + length > size:
-                    return stop(FileEnd.CUT)
-                body = stream.read(length)
-                try:
-                    records = _records_of(opcode, length, body)
-                except Exception as exc:  # any failure to read a whole body is damage
-                    name = _opcode_name(opcode)
-                    return stop(FileEnd.DAMAGED, f"unreadable {name} record at byte {offset} "
-                                f"({type(exc).__name__}: {exc})")  # fmt: skip
-                for record in records:
-                    messages += isinstance(record, Message)
-                    yield record
-                has_header = True
-                offset += _RECORD_HEAD.size + length
-                if opcode == Opcode.FOOTER:
-                    if stream.read() != MCAP_MAGIC:
-                        reason = f"the footer ending at byte {offset} is not followed by the "
-                        return stop(FileEnd.DAMAGED, reason + "closing magic and the file's end")
-                    offset = size
-                    return stop(FileEnd.COMPLETE)
+            self.result = yield from _walk(stream)
 
 
-def scan(path: Path) -> ScanResult:
-    """How the file at ``path`` ends (reads every record)."""
-    records = RecordScan(path)
-    for _ in records:
-        pass
-    assert records.result is not None  # set by every way out of the iteration
-    return records.result
+def _walk(stream: BinaryIO) -> Generator[McapRecord, None, ScanResult]:
+    """Yield the records of ``stream`` from its start; return how its records end."""
+    stream.seek(0, io.SEEK_END)
+    size = stream.tell()
+    stream.seek(0)
+    messages, offset, has_header = 0, 0, False
+
+    def end(how: FileEnd, reason: str = "") -> ScanResult:
+        return ScanResult(how, offset, reason, has_header, messages)
+
+    if stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+        return end(FileEnd.DAMAGED, "it does not start with the MCAP magic bytes")
+    offset = len(MCAP_MAGIC)
+    while True:
+        head = stream.read(_RECORD_HEAD.size)
+        if len(head) < _RECORD_HEAD.size:
+            return end(FileEnd.CUT)
+        opcode, length = _RECORD_HEAD.unpack(head)
+        problem = _implausible(opcode, length, has_header)
+        if problem:
+            return end(FileEnd.DAMAGED, f"{problem} at byte {offset}")
+        if offset + _RECORD_HEAD.size + length > size:
+            return end(FileEnd.CUT)
+        body = stream.read(length)
+        try:
+            records = _records_of(opcode, length, body)
+        except Exception as exc:  # any failure to read a whole body is damage
+            reason = f"unreadable {_opcode_name(opcode)} record at byte {offset}"
+            return end(FileEnd.DAMAGED, f"{reason} ({type(exc).__name__}: {exc})")
+        for record in records:
+            messages += isinstance(record, Message)
+            yield record
+        has_header = True
+        offset += _RECORD_HEAD.size + length
+        if opcode == Opcode.FOOTER:
+            if stream.read(len(MCAP_MAGIC) + 1) != MCAP_MAGIC:
+                reason = f"the footer ending at byte {offset} is not followed by the closing "
+                return end(FileEnd.DAMAGED, reason + "magic and the end of the file")
+            offset = size
+            return end(FileEnd.COMPLETE)
 
 
 def _implausible(opcode: int, length: int, has_header: bool) -> str:
