@@ -10,7 +10,9 @@ a new arm of the same name has come up (which must not move). What a handle *is*
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable, Iterator
+from types import FunctionType
 from typing import Any
 
 import numpy as np
@@ -20,6 +22,7 @@ import armfleet
 from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
 from armfleet.messages import GripperCommand, JointCommand
 from armfleet.remote import RemoteError
+from armfleet.tf_tree import TfTree
 from tests.test_remote_python_server import Served, served  # noqa: F401  (served: a fixture)
 
 #: A settled arm's joints drift less than this over 0.2 s [rad] (test_bad_input's figure).
@@ -226,3 +229,38 @@ def test_the_live_api_clients_handles_say_the_same(served: Served) -> None:  # n
         client.close()
     with pytest.raises(ArmfleetError, match="this client is closed"):
         bob.move_to(np.zeros(7))
+
+
+#: What a handle *is*: readable after close. Everything else public must raise.
+IDENTITY = {
+    armfleet.Arm: {"name", "namespace", "model", "pose", "joint_names", "joint_limits",
+                   "has_gripper", "lifetime"},
+    armfleet.Gripper: {"max_width", "max_force", "lifetime"},
+    TfTree: {"lifetime"},
+}  # fmt: skip
+
+
+def test_no_public_member_of_a_handle_escapes_the_check(
+    closed: tuple[armfleet.World, armfleet.Arm, armfleet.Gripper],
+) -> None:
+    """A guard for members added later: every public method and property of Arm, Gripper
+    and TfTree, called on a closed world's handle, raises WorldClosed, but for IDENTITY."""
+    world, bob, gripper = closed
+    handles = {armfleet.Arm: bob, armfleet.Gripper: gripper, TfTree: world.tf}
+    checked = []
+    for cls, handle in handles.items():
+        for name in dir(cls):
+            member = inspect.getattr_static(cls, name)
+            if name.startswith("_") or name in IDENTITY[cls]:
+                continue
+            if not isinstance(member, property | FunctionType):
+                continue
+            with pytest.raises(WorldClosed):
+                value = getattr(handle, name)
+                if isinstance(member, FunctionType):
+                    value()  # the check comes before any argument is looked at
+            checked.append(f"{cls.__name__}.{name}")
+    assert {"Arm.move_to", "Gripper.close", "TfTree.lookup"} <= set(checked)
+    for cls, handle in handles.items():
+        for name in IDENTITY[cls]:
+            getattr(handle, name)
