@@ -61,6 +61,21 @@ class RequestTimeout(ArmfleetError):
     """The world did not answer a request in time."""
 
 
+class TooManyRequests(ArmfleetError):
+    """A client has as many requests in flight as it may; this one was refused, unapplied.
+
+    Attributes:
+        limit: requests one client may have in flight.
+    """
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        super().__init__(
+            f"too many requests in flight from this client (limit {limit}); wait for "
+            "replies before sending more (nothing was applied)"
+        )
+
+
 class ConnectionLost(ArmfleetError):
     """The world went away (it closed, or stopped answering)."""
 

@@ -1,4 +1,11 @@
-"""Requests handed to the stepping thread and not yet answered."""
+"""Requests handed to the stepping thread and not yet answered.
+
+Limits are per client (per ZeroMQ peer): one client with
+:data:`~armfleet.remote.protocol.MAX_IN_FLIGHT_PER_CLIENT` requests unanswered (its
+replies held unread included) is refused more, in a reply to each, while the
+others are served. The whole server's :data:`MAX_PENDING_REQUESTS` only protects
+the world's queue. The requests of a client that disconnected are cancelled.
+"""
 
 from __future__ import annotations
 
@@ -6,15 +13,16 @@ import contextlib
 import itertools
 import queue
 import time
+from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import Future, InvalidStateError
 from dataclasses import dataclass
 from typing import Any
 
 from armfleet.errors import ArmfleetError
-from armfleet.remote.errors import ConnectionLost, RequestTimeout
+from armfleet.remote.errors import ConnectionLost, RequestTimeout, TooManyRequests
 from armfleet.remote.outbox import Outbox
-from armfleet.remote.protocol import MAX_PENDING_REQUESTS, Service
+from armfleet.remote.protocol import MAX_IN_FLIGHT_PER_CLIENT, MAX_PENDING_REQUESTS, Service
 from armfleet.remote.run_state import RunState
 from armfleet.remote.wakeup import Wakeup
 from armfleet.world import World
@@ -31,6 +39,8 @@ class _Pending:
     deadline: float | None
     #: Turns the work's result into the reply, in the server thread.
     finish: Callable[[Any], Any] | None = None
+    #: Set when its client has gone: a wait stops polling.
+    abandoned: bool = False
 
 
 class PendingRequests:
@@ -48,6 +58,7 @@ class PendingRequests:
         self._wakeup = wakeup
         self._run_state = run_state
         self._pending: dict[int, _Pending] = {}
+        self._per_peer: Counter[bytes] = Counter()
         self._completed: queue.SimpleQueue[int] = queue.SimpleQueue()
         self._keys = itertools.count()
         self._stopping = False
@@ -61,8 +72,12 @@ class PendingRequests:
         timeout: float,
         finish: Callable[[Any], Any] | None = None,
     ) -> None:
-        """Run ``work`` at the next step boundary; cancel it if not started within ``timeout``."""
-        self._check_room()
+        """Run ``work`` at the next step boundary; cancel it if not started within ``timeout``.
+
+        Raises:
+            TooManyRequests: ``peer`` has too many requests in flight already.
+        """
+        self._check_room(peer)
         try:
             future = self._world.submit(work)
         except queue.Full:
@@ -78,11 +93,16 @@ class PendingRequests:
         timeout: float,
         what: str,
     ) -> None:
-        """Run ``check`` at every step boundary until it returns something (the reply)."""
-        self._check_room()
+        """Run ``check`` at every step boundary until it returns something (the reply).
+
+        Raises:
+            TooManyRequests: ``peer`` has too many requests in flight already.
+        """
+        self._check_room(peer)
         outcome: Future[Any] = Future()
         outcome.set_running_or_notify_cancel()
         deadline = time.monotonic() + timeout
+        pending = _Pending(peer, request_id, Service.WAIT, outcome, timeout, None)
 
         def settle(value: Any = None, error: BaseException | None = None) -> None:
             with contextlib.suppress(InvalidStateError):
@@ -100,7 +120,9 @@ class PendingRequests:
                 if error is not None or previous.result() is not None:
                     settle(None if error else previous.result(), error)
                     return
-            if time.monotonic() > deadline:
+            if pending.abandoned:
+                settle(error=ConnectionLost("the client went away"))
+            elif time.monotonic() > deadline:
                 settle(error=RequestTimeout(f"{what} after {timeout:g} s"))
             elif self._stopping:
                 settle(error=ConnectionLost("the world is shutting down"))
@@ -111,17 +133,25 @@ class PendingRequests:
                     settle(error=exc)
 
         poll(None)
-        self._track(_Pending(peer, request_id, Service.WAIT, outcome, timeout, None))
+        self._track(pending)
 
-    def _check_room(self) -> None:
+    def in_flight(self, peer: bytes | None = None) -> int:
+        """Requests not answered yet, of ``peer`` or of every client."""
+        return len(self._pending) if peer is None else self._per_peer[peer]
+
+    def _check_room(self, peer: bytes) -> None:
+        if self._per_peer[peer] + self._outbox.held(peer) >= MAX_IN_FLIGHT_PER_CLIENT:
+            raise TooManyRequests(MAX_IN_FLIGHT_PER_CLIENT)
         if len(self._pending) >= MAX_PENDING_REQUESTS:
             raise ArmfleetError(
-                f"the world has {len(self._pending)} requests in flight; try again shortly"
+                f"the world has {len(self._pending)} requests in flight from "
+                f"{len(self._per_peer)} clients; try again shortly"
             )
 
     def _track(self, pending: _Pending) -> None:
         key = next(self._keys)
         self._pending[key] = pending
+        self._per_peer[pending.peer] += 1
 
         def done(_: Future[Any]) -> None:  # any thread: the stepping one, usually
             self._completed.put(key)
@@ -138,9 +168,9 @@ class PendingRequests:
                 key = self._completed.get_nowait()
             except queue.Empty:
                 return
-            pending = self._pending.pop(key, None)
+            pending = self._pop(key)
             if pending is None:
-                continue  # answered already (expired)
+                continue  # answered already (expired, or its client went away)
             try:
                 if pending.future.cancelled():
                     raise ConnectionLost(f"{pending.service.value}: cancelled")
@@ -162,12 +192,39 @@ class PendingRequests:
         now = time.monotonic()
         for key, pending in tuple(self._pending.items()):
             if pending.deadline is not None and now > pending.deadline and pending.future.cancel():
-                del self._pending[key]
+                self._pop(key)
                 error = RequestTimeout(
                     f"{pending.service.value}: the world did not take the request up within "
                     f"{pending.timeout_s:g} s (it is busy or not stepping); nothing was applied"
                 )
                 self._outbox.reply_error(pending.peer, pending.request_id, error)
+
+    def cancel_client(self, peer: bytes) -> int:
+        """Cancel the requests of ``peer``, which has gone (no reply: nobody would read it).
+
+        Work not started yet never runs; waits stop polling at the next step.
+
+        Returns:
+            How many requests were cancelled.
+        """
+        if not self._per_peer[peer]:
+            del self._per_peer[peer]
+            return 0
+        mine = [key for key, pending in self._pending.items() if pending.peer == peer]
+        for key in mine:
+            pending = self._pop(key)
+            assert pending is not None
+            pending.abandoned = True
+            pending.future.cancel()  # False once it runs (and a wait runs from the start)
+        return len(mine)
+
+    def _pop(self, key: int) -> _Pending | None:
+        pending = self._pending.pop(key, None)
+        if pending is not None:
+            self._per_peer[pending.peer] -= 1
+            if not self._per_peer[pending.peer]:
+                del self._per_peer[pending.peer]
+        return pending
 
     def fail_all(self, reason: str) -> None:
         """Cancel what has not started and answer every request with ``reason``."""
@@ -176,3 +233,4 @@ class PendingRequests:
             pending.future.cancel()
             self._outbox.reply_error(pending.peer, pending.request_id, ConnectionLost(reason))
         self._pending.clear()
+        self._per_peer.clear()

@@ -40,8 +40,15 @@ MAX_QUEUE_SIZE = 10_000
 MAX_SUBSCRIPTIONS_PER_STREAM = 256
 #: Streams one server serves at once.
 MAX_STREAMS = 256
-#: Requests one server keeps in flight at once (waits included).
-MAX_PENDING_REQUESTS = 256
+#: Requests one client may have in flight at once (waits and unread replies included);
+#: more are refused, each with a reply, and the other clients are served meanwhile.
+MAX_IN_FLIGHT_PER_CLIENT = 64
+#: Requests one server keeps in flight at once, all clients together (waits included):
+#: what the world's request queue holds, with room for the server's own work.
+MAX_PENDING_REQUESTS = 768
+#: Replies held for one client that sends faster than it reads; past it they are
+#: dropped and the client told how many [bytes].
+MAX_HELD_REPLY_BYTES = 4 * 1024 * 1024
 #: Longest time a request may wait in the world's queue, whatever the client asks [s].
 MAX_REQUEST_TIMEOUT_S = REQUEST_TIMEOUT_S.high
 

@@ -7,6 +7,11 @@ messages reach it through bounded per-subscription queues filled by bus
 callbacks in the stepping thread, which it empties every 2 ms in batches. So a
 slow, dead or malicious client costs the world a few microseconds per message
 at most.
+
+Limits are per client: a client with too many requests in flight is refused
+more, one reply each, while the others are served; every request gets exactly
+one reply (held while its client does not read); and the requests of a client
+that disconnects are cancelled (see :mod:`armfleet.remote.peer_watch`).
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from armfleet.remote.arguments import Arguments
 from armfleet.remote.codec import unpack_request
 from armfleet.remote.errors import ProtocolError
 from armfleet.remote.outbox import Outbox
+from armfleet.remote.peer_watch import PeerWatch
 from armfleet.remote.pending_requests import PendingRequests
 from armfleet.remote.protocol import (
     HARD_FRAME_LIMIT_BYTES,
@@ -114,6 +120,7 @@ class WorldServer:
         self._pending = PendingRequests(world, outbox, self._wakeup, run_state)
         self._streams = StreamHub(world, outbox)
         self._outbox = outbox
+        self._peers = PeerWatch(self._socket)
         self._stopping = threading.Event()
         self._closed = False
         #: The runtime file naming this world, or None (not asked, or another world holds it).
@@ -171,20 +178,23 @@ class WorldServer:
         poller = zmq.Poller()
         poller.register(self._socket, zmq.POLLIN)
         poller.register(self._wakeup.fileno(), zmq.POLLIN)
+        poller.register(self._peers.monitor, zmq.POLLIN)
         next_tick = time.monotonic() + TICK_PERIOD_S
         try:
             while not self._stopping.is_set():
                 wake_at = min(next_tick, self._pending.next_deadline() or next_tick)
                 timeout = wake_at - time.monotonic()
-                if self._streams.subscription_count:
+                if self._streams.subscription_count or self._outbox.holding:
                     # Streams are flushed on this beat, in batches: cheaper for the world
                     # than a wake-up per message.
                     timeout = min(timeout, STREAM_FLUSH_PERIOD_S)
                 poller.poll(max(0, round(timeout * 1000)))
                 self._wakeup.clear()
+                self._forget(self._peers.departed())  # before reading: see PeerWatch
                 self._receive()
                 self._pending.answer_completed()
                 self._pending.expire()
+                self._forget(self._outbox.flush())
                 self._streams.flush()
                 if time.monotonic() >= next_tick:
                     self._streams.tick()
@@ -195,16 +205,30 @@ class WorldServer:
             reason = "the world is shutting down"
             self._streams.close(reason)
             self._pending.fail_all(reason)
+            self._peers.close()
             self._socket.close(linger=200)
             self._context.term()
 
     def _receive(self) -> None:
         for _ in range(READ_BURST):
             try:
-                frames = self._socket.recv_multipart(zmq.NOBLOCK)
+                frames = self._socket.recv_multipart(zmq.NOBLOCK, copy=False)
             except zmq.Again:
                 return
-            self._on_request(frames[0], frames[1:])
+            peer = frames[0].bytes
+            if self._peers.has_departed(peer):
+                continue  # read after its client left: nobody to answer, nothing to do
+            self._peers.note(peer, frames[0])
+            self._on_request(peer, [frame.bytes for frame in frames[1:]])
+
+    def _forget(self, peers: list[bytes]) -> None:
+        """Cancel the requests and streams of clients that disconnected."""
+        for peer in peers:
+            cancelled = self._pending.cancel_client(peer)
+            self._outbox.forget(peer)
+            self._streams.detach(peer, None)
+            if cancelled:
+                logger.info("a client went away; cancelled its %d request(s)", cancelled)
 
     def _on_request(self, peer: bytes, parts: list[bytes]) -> None:
         request_id: int | None = None
@@ -284,6 +308,7 @@ class WorldServer:
             "pid": os.getpid(),
             "streams": len(self._streams.streams),
             "subscriptions": self._streams.subscription_count,
+            "requests": self._pending.in_flight(),
         }
 
 
