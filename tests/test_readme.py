@@ -8,6 +8,8 @@ Each docs page's ``python`` blocks run in order as one program.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import shlex
@@ -264,7 +266,22 @@ def test_the_docs_have_examples_and_none_is_left_unrun() -> None:
 def test_docs_python_examples_run_in_order(page: str) -> None:
     blocks = code_blocks(DOCS / page, "python")
     namespace: dict[str, object] = {}
-    for block in blocks:
-        exec(compile(block, str(DOCS / page), "exec"), namespace)
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        for block in blocks:
+            exec(compile(block, str(DOCS / page), "exec"), namespace)
     world = namespace["world"]
     assert getattr(world, "closed", False), f"docs/{page}'s examples end with world.close()"
+    if page == "manipulation.md":
+        check_the_cube_was_lifted(printed.getvalue().splitlines()[-1])
+
+
+def check_the_cube_was_lifted(last_line: str) -> None:
+    """The pick: the last line printed is the cube's position and whether bob holds it."""
+    *position, holding = last_line.replace("[", " ").replace("]", " ").replace(",", " ").split()
+    x, y, z = (float(value) for value in position)
+    assert holding == "True"
+    # At rest on the 0.3 m table the 5 cm cube's centre is at 0.325 m; bob lifts it 0.15 m.
+    # 5 mm: the most a held box may slip in the tcp (tests/test_gripper.py).
+    assert abs(z - (0.325 + 0.15)) < 5e-3, z
+    assert abs(x - 0.6) < 5e-3 and abs(y - 0.1) < 5e-3, (x, y)  # where set_pose put it
