@@ -42,6 +42,8 @@ WIDTH_TOLERANCE_M = 5e-4
 START_WIDTH_M = 0.04
 #: Commands started at once (each only parses, or fails at its first request).
 BATCH = 6
+#: A bad command still running after this long hangs [s] (a generous bound, not a timing).
+HANG_S = 120
 
 WAIT_RANGE = "give seconds in [0, 600]"
 TIMEOUT_RANGE = "give seconds in [0.001, 600]"
@@ -181,7 +183,12 @@ def run_all(runtime: Path, invocations: list[list[str]]) -> list[subprocess.Comp
             for args in invocations[start : start + BATCH]
         ]
         for process in processes:
-            stdout, stderr = process.communicate(timeout=120)
+            try:
+                stdout, stderr = process.communicate(timeout=HANG_S)
+            except subprocess.TimeoutExpired:  # e.g. a --duration that never ends
+                process.kill()
+                stdout, stderr = process.communicate()
+                stderr += f"(still running after {HANG_S} s: killed)"
             results.append(
                 subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
             )
