@@ -18,9 +18,9 @@ import pybullet as p
 
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
-from armfleet.collision_filter import rigid_groups
+from armfleet.collision_filter import fixed_links, rigid_groups
 from armfleet.messages import CollisionReport, Contact
-from armfleet.start_clearance import Neighbour
+from armfleet.start_clearance import BodyKind, Neighbour
 
 COLLISIONS_TOPIC = "/collisions"
 GROUND = "ground"
@@ -85,12 +85,20 @@ class ContactMonitor:
         self._dynamic_objects.pop(body_id, None)
 
     def neighbours(self) -> tuple[Neighbour, ...]:
-        """Every body watched here (floor, arms, objects), for a new arm's clearance check."""
-        supports = {self._ground, *self._static_objects}  # what a base may stand on
+        """Every body watched here (floor, arms, objects), for a newcomer's clearance check."""
         return tuple(
-            Neighbour(body_id, name, dict(links), body_id in supports)
+            Neighbour(body_id, name, dict(links), *self._kind(body_id))
             for body_id, (name, links) in self._bodies.items()
         )
+
+    def _kind(self, body_id: int) -> tuple[BodyKind, frozenset[int]]:
+        """What the body is, and its links that never move."""
+        if body_id in self._arms:
+            return BodyKind.ARM, frozenset(fixed_links(self._arms[body_id]))
+        if body_id in self._dynamic_objects:
+            return BodyKind.MOVING_OBJECT, frozenset()
+        kind = BodyKind.GROUND if body_id == self._ground else BodyKind.STATIC_OBJECT
+        return kind, frozenset({-1})
 
     def is_dynamic_object(self, name: str) -> bool:
         """Whether ``name`` is a scene object with a mass (arms may touch it freely)."""

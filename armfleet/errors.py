@@ -248,6 +248,39 @@ class StartPoseCollision(ArmfleetError):
         )
 
 
+class ObjectCollision(ObjectError):
+    """A scene object that would touch an arm, or overlap the floor or another object,
+    where it is added (see :mod:`armfleet.object_clearance`).
+
+    Attributes:
+        other: the arm, object or ``"ground"`` in the way.
+        other_link: the arm's link (``""`` for an object or the ground).
+        distance_m: signed distance between the two [m]; negative: overlap.
+        allowed_m: the smallest distance allowed there [m] (an arm's clearance, or
+            minus the overlap a resting object may have).
+    """
+
+    def __init__(
+        self, name: str, other: str, other_link: str, distance_m: float, allowed_m: float
+    ) -> None:
+        self.other, self.other_link = other, other_link
+        self.distance_m, self.allowed_m = distance_m, allowed_m
+        if allowed_m > 0:  # an arm
+            verb, rule = "touch", f"keep {allowed_m * 1e3:g} mm clear of an arm"
+        else:
+            verb, rule = "overlap", f"a resting object may sink {-allowed_m * 1e3:g} mm at most"
+        gap = f"{-distance_m * 1e3:.1f} mm into it" if distance_m < 0 else (
+            f"{distance_m * 1e3:.2f} mm from it"
+        )  # fmt: skip
+        where = f"{other_link}, " if other_link else ""
+        super().__init__(
+            name,
+            "at",
+            f"it would {verb} {other} there ({where}{gap}; {rule}); nothing was added: "
+            "choose a pose clear of it",
+        )
+
+
 class NoGripper(ArmfleetError):
     """The arm's model has no fingers to grip with."""
 

@@ -9,6 +9,7 @@ from armfleet.arm import Arm
 from armfleet.objects import ObjectSpec, WorldObject
 from armfleet.spec import FleetSpec, load_spec
 from armfleet.spec.fleet_spec import ArmSpec
+from armfleet.spec.scene_rehearsal import rehearse
 from armfleet.world import World
 
 
@@ -49,7 +50,11 @@ def launch(
     viewer_port: int | None = None,
     before_spawn: Callable[[World], None] | None = None,
 ) -> World:
-    """Create the spec's world, bring its arms up one at a time, then add its objects.
+    """Check the whole scene, then create the spec's world, bring its arms up one at a
+    time, and add its objects.
+
+    The check (:func:`armfleet.spec.scene_rehearsal.rehearse`) runs before any world
+    exists: if the world would refuse any arm or object, nothing comes up.
 
     Args:
         spec: a spec, or a spec file (path or name of a shipped spec).
@@ -60,8 +65,15 @@ def launch(
 
     Returns:
         The world with every arm ready and every object in place; close it when done.
+
+    Raises:
+        SpecError: a spec file that does not pass ``launch --check``.
+        ArmfleetError: the world's own error for the first arm or object of a
+            :class:`FleetSpec` it would refuse (e.g. :class:`StartPoseCollision`).
     """
-    if not isinstance(spec, FleetSpec):
+    if isinstance(spec, FleetSpec):
+        rehearse(spec)  # a spec file was rehearsed as it was read
+    else:
         spec = load_spec(spec)
     settings = spec.world
     world = World(

@@ -20,13 +20,16 @@ This runs before any controller or topic of the arm exists; on a failure the
 body is removed again and the world is as it was. The world runs it in
 :meth:`armfleet.World.spawn` (so the Python API, the CLI, launch and the live
 API all ask it), and a launch spec check runs it in a scratch physics client
-holding the spec's objects and arms at their start poses.
+holding the spec's objects and arms at their start poses. A new scene object is
+held to the same rule against the arms, whichever of the two comes first (see
+:mod:`armfleet.object_clearance`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from enum import Enum
 
 import pybullet as p
 
@@ -41,22 +44,38 @@ from armfleet.messages import FloatArray
 CLEARANCE_M = 1e-3
 
 
+class BodyKind(Enum):
+    """What a body in the world is, for the clearance checks."""
+
+    GROUND = "ground"
+    ARM = "arm"
+    STATIC_OBJECT = "static object"
+    MOVING_OBJECT = "moving object"
+
+
 @dataclass(frozen=True)
 class Neighbour:
-    """A body already in the world, as the clearance check sees it.
+    """A body already in the world, as the clearance checks see it.
 
     Attributes:
         body_id: PyBullet body id.
         name: arm or object name, or ``"ground"``.
         links: link index -> link name (``{-1: ""}`` for an object or the ground).
-        supports: the ground or a static object: a new arm's links that never
-            move may rest on it.
+        kind: ground, arm, static or moving object.
+        fixed_links: its links that never move (an arm's base piece; ``{-1}`` for
+            the ground and a static object; none for a moving object).
     """
 
     body_id: int
     name: str
     links: Mapping[int, str]
-    supports: bool
+    kind: BodyKind
+    fixed_links: frozenset[int] = frozenset()
+
+    @property
+    def supports(self) -> bool:
+        """The ground or a static object: a new arm's links that never move may rest on it."""
+        return self.kind in (BodyKind.GROUND, BodyKind.STATIC_OBJECT)
 
 
 @dataclass(frozen=True)
@@ -90,14 +109,14 @@ def start_contacts(
     solid = set(solid_links(client, body))
     found: list[StartContact] = []
     ignored = ignored_self_pairs(client, body, ignored_pairs)
-    for a, b, distance in _closest(client, body.body_id, body.body_id, clearance_m):
+    for a, b, distance in closest_pairs(client, body.body_id, body.body_id, clearance_m):
         if a < b and a in solid and b in solid and (a, b) not in ignored:
             found.append(StartContact(names[a], name, names[b], distance))
     resting = fixed_links(body)
     for other in neighbours:
         if other.body_id == body.body_id:
             continue
-        for a, b, distance in _closest(client, body.body_id, other.body_id, clearance_m):
+        for a, b, distance in closest_pairs(client, body.body_id, other.body_id, clearance_m):
             if a in resting and other.supports:
                 continue
             found.append(
@@ -152,7 +171,7 @@ def load_clear_body(
     return body
 
 
-def _closest(
+def closest_pairs(
     client: int, first: int, second: int, distance_m: float
 ) -> list[tuple[int, int, float]]:
     """(link of ``first``, link of ``second``, signed distance [m]) of each pair closer

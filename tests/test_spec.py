@@ -78,7 +78,7 @@ def spec_text(body: str) -> str:
 
 
 BOB = "  - name: bob\n    model: panda\n"
-BOX = "  - name: box\n    shape: box\n    size_m: [0.1, 0.1, 0.1]\n"
+BOX = "  - name: box\n    shape: box\n    size_m: [0.1, 0.1, 0.1]\n    at_m: [2, 0, 0.05]\n"
 BAD_SPECS = {
     "yaml syntax": ("world:\n\tdt_s: 0.001\n", 2, "not valid YAML"),
     "unknown top key": ("arm:\n" + BOB, 1, "did you mean 'arms'"),
@@ -121,20 +121,20 @@ BAD_SPECS = {
                             2, "not a whole number"),
     "grid too dense": ("grid:\n  rows: 2\n  columns: 2\n  spacing_m: 0.1\n  model: panda\n", 4,
                        "arm0_1 would touch arm0_0 at its start pose"),
-    "object shape unknown": ("objects:\n" + BOX + "  - name: can\n    shape: cilinder\n", 6,
+    "object shape unknown": ("objects:\n" + BOX + "  - name: can\n    shape: cilinder\n", 7,
                              "objects[1].shape: unknown shape 'cilinder'; "
                              "valid: box, cylinder, sphere, mesh"),
     "object size length": ("objects:\n  - name: box\n    shape: box\n    size_m: [1, 2]\n", 4,
                            "objects[0].size_m: got 2 numbers; a box takes (x, y, z)"),
     "object size without unit": ("objects:\n  - name: box\n    shape: box\n    size: 1\n", 4,
                                  "did you mean 'size_m'"),
-    "object negative mass": ("objects:\n" + BOX + "    mass_kg: -2\n", 5,
+    "object negative mass": ("objects:\n" + BOX + "    mass_kg: -2\n", 6,
                              "objects[0].mass_kg: -2.0 is outside [0, 10000] kg"),
-    "object colour length": ("objects:\n" + BOX + "    color_rgba: [1, 0, 0]\n", 5,
+    "object colour length": ("objects:\n" + BOX + "    color_rgba: [1, 0, 0]\n", 6,
                              "expected 4 numbers, got 3"),
     "object mesh missing": ("objects:\n  - name: cup\n    shape: mesh\n    mesh: cup.stl\n", 4,
                             "objects[0].mesh: mesh file '/specs/cup.stl' not found"),
-    "object name twice": ("objects:\n" + BOX + BOX, 5, "objects[1].name: object name 'box' "
+    "object name twice": ("objects:\n" + BOX + BOX, 6, "objects[1].name: object name 'box' "
                           "is used twice"),
     "object named like an arm": ("arms:\n" + BOB + "objects:\n" + BOX.replace("box\n", "bob\n", 1),
                                  5, "objects[0].name: name 'bob' is an arm's"),

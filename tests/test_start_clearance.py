@@ -10,6 +10,7 @@ are then held to what matters: nobody gets a protective stop.
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import tempfile
 from collections.abc import Iterator, Sequence
@@ -21,10 +22,12 @@ import pytest
 
 import armfleet
 from armfleet.arm_assembly import start_positions
-from armfleet.errors import StartPoseCollision
+from armfleet.errors import ArmfleetError, ObjectCollision, StartPoseCollision
 from armfleet.kinematics import ArmKinematics
+from armfleet.object_clearance import RESTING_OVERLAP_M
+from armfleet.objects import ObjectSpec, object_spec
 from armfleet.spawn_pose import SpawnPose
-from armfleet.spec import SpecError, parse_spec
+from armfleet.spec import ArmSpec, FleetSpec, SpecError, parse_spec
 from armfleet.start_clearance import CLEARANCE_M
 from tests.remote_world import ARMFLEET, runtime_env
 
@@ -191,6 +194,8 @@ def test_a_new_world_from_the_cli_refuses_touching_arms(tmp_path: Path) -> None:
     lines = result.stderr.splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
     assert "toby would touch bob at its start pose" in lines[0]
+    # The whole fleet is checked before the world starts: bob never came up.
+    assert "[bob]" not in result.stdout and "ready" not in result.stdout, result.stdout
 
 
 @pytest.mark.parametrize(
@@ -207,6 +212,20 @@ def test_a_new_world_from_the_cli_refuses_touching_arms(tmp_path: Path) -> None:
             "arms[1].initial_positions", 7, "toby would touch itself",
             id="folded into itself -> the arm's initial_positions",
         ),
+        pytest.param(
+            "objects:\n  - name: box\n    shape: box\n    size_m: [0.1, 0.1, 0.1]\n"
+            "    mass_kg: 0.5\n    at_m: [2, 0, 0.04]\n",
+            "objects[0].at_m", 9, "it would overlap ground there (10.0 mm into it",
+            id="a 0.5 kg box sunk 10 mm into the floor -> the object's at_m",
+        ),
+        pytest.param(
+            "objects:\n  - name: table\n    shape: box\n    size_m: [0.6, 0.6, 0.4]\n"
+            "    mass_kg: 0\n    at_m: [2, 0, 0.2]\n"
+            "  - name: box\n    shape: box\n    size_m: [0.1, 0.1, 0.1]\n"
+            "    at_m: [2, 0, 0.4]\n",
+            "objects[1].at_m", 13, "it would overlap table there (50.0 mm into it",
+            id="a box half into a static table -> the box's at_m",
+        ),
     ],
 )  # fmt: skip
 def test_a_spec_points_at_the_line_to_change(extra: str, field: str, line: int, says: str) -> None:
@@ -215,3 +234,177 @@ def test_a_spec_points_at_the_line_to_change(extra: str, field: str, line: int, 
         parse_spec(text, "cell.yaml")
     assert (raised.value.field, raised.value.line) == (field, line)
     assert says in raised.value.problem
+
+
+# -- scene objects: the same question, asked of an object (armfleet/object_clearance.py) ------
+#: A 10 cm box, as the tests below place it [m].
+SIDE_M = 0.1
+
+
+def plain_box(client: int, at: Sequence[float], mass: float, side: float = SIDE_M) -> int:
+    """A box as a plain PyBullet body (the reference: no armfleet code)."""
+    shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=[side / 2] * 3, physicsClientId=client)
+    return int(p.createMultiBody(mass, shape, basePosition=list(at), physicsClientId=client))
+
+
+@pytest.mark.parametrize("mass", [0.0, 0.5], ids=["static box", "0.5 kg box"])
+def test_an_object_is_refused_exactly_when_the_physics_says_it_touches_an_arm(
+    world: armfleet.World, physics: int, mass: float
+) -> None:
+    """A box slid along x through bob's hand; bob's hand must not be disturbed by it."""
+    bob_arm = world.spawn("bob", at=(0, 0))
+    bob = load_at_start(physics, world, "bob", SpawnPose())
+    flange = world.tf.world_pose("bob_tool0")[:3, 3]
+    bodies = p.getNumBodies(physicsClientId=world.physics_client)
+    verdicts = {}
+    for dx in (0.0, 0.05, 0.1, 0.15, 0.2, 0.3):
+        at = flange + np.array([dx, 0.0, 0.0])
+        box = plain_box(physics, at, mass)
+        touching = deepest_contact_m(physics, bob, box) < CLEARANCE_M
+        p.removeBody(box, physicsClientId=physics)
+        if touching:
+            with pytest.raises(ObjectCollision, match="it would touch bob there") as raised:
+                world.add_object("box", "box", size=(SIDE_M,) * 3, mass=mass, at=at)
+            assert raised.value.other == "bob" and raised.value.other_link.startswith("bob_")
+            assert not world.objects
+            assert p.getNumBodies(physicsClientId=world.physics_client) == bodies
+            assert_nobody_stopped(world, 0)
+        else:
+            world.add_object("box", "box", size=(SIDE_M,) * 3, mass=mass, at=at)
+            world.remove_object("box")
+        verdicts[dx] = touching
+    # Around the hand: refused (it used to stop bob, or fling the box and bob's joints).
+    assert verdicts[0.0] and not verdicts[0.3]
+    assert bob_arm.status(world.time).mode is armfleet.ArmMode.HOLDING
+
+
+Placed = tuple[str, float, tuple[float, float, float], tuple[float, float, float]]
+
+
+def placed(name: str, mass: float, size: Sequence[float], at: Sequence[float]) -> Placed:
+    """(name, mass [kg], box size [m], centre [m])."""
+    return name, mass, (size[0], size[1], size[2]), (at[0], at[1], at[2])
+
+
+CUBE = (SIDE_M,) * 3
+TABLE = placed("table", 0.0, (0.6, 0.6, 0.4), (0, 0, 0.2))
+LOW = placed("low", 0.5, CUBE, (0, 0, 0.05))  # a 0.5 kg box on the floor
+
+
+@pytest.mark.parametrize(
+    ("before", "new"),
+    [
+        pytest.param((), placed("box", 0.5, CUBE, (0, 0, 0.05)),
+                     id="a 0.5 kg box resting on the floor -> added, stays put"),
+        pytest.param((), placed("box", 0.5, CUBE, (0, 0, 0.049)),
+                     id="a 0.5 kg box 1 mm into the floor -> added, moved out by 1 mm"),
+        pytest.param((TABLE,), placed("box", 0.5, CUBE, (0, 0, 0.45)),
+                     id="a 0.5 kg box on a static table -> added, stays put"),
+        pytest.param((LOW,), placed("box", 0.5, CUBE, (0, 0, 0.15)),
+                     id="a 0.5 kg box stacked on another -> added, both stay put"),
+        pytest.param((placed("top", 0.0, (0.6, 0.6, 0.04), (0, 0, 0.4)),),
+                     placed("leg", 0.0, (0.05, 0.05, 0.4), (0.25, 0.25, 0.2)),
+                     id="a static leg 2 cm into a static table top -> added, neither ever moves"),
+        pytest.param((), placed("platform", 0.0, (1, 1, 0.2), (0, 0, 0)),
+                     id="a static platform half under the floor -> added, neither ever moves"),
+    ],
+)  # fmt: skip
+def test_an_object_may_rest_on_the_floor_or_an_object(
+    world: armfleet.World, before: Sequence[Placed], new: Placed
+) -> None:
+    for name, mass, size, at in (*before, new):
+        world.add_object(name, "box", size=size, mass=mass, at=at)
+    world.run(0.5)
+    for name, _, _, at in (*before, new):
+        moved = np.linalg.norm(world.object(name).position - np.array(at))
+        # Resting: moved by no more than it was allowed to sink (the solver pushes it out).
+        assert moved < RESTING_OVERLAP_M, (name, moved)
+
+
+@pytest.mark.parametrize(
+    ("before", "new", "other"),
+    [
+        pytest.param((), placed("box", 0.5, CUBE, (0, 0, 0.04)), "ground",
+                     id="a 0.5 kg box 10 mm into the floor -> ObjectCollision naming ground"),
+        pytest.param((TABLE,), placed("box", 0.5, CUBE, (0, 0, 0.4)), "table",
+                     id="a 0.5 kg box half into a static table -> ObjectCollision naming it"),
+        pytest.param((LOW,), placed("box", 0.0, CUBE, (0.05, 0, 0.05)),
+                     "low", id="a static box into a 0.5 kg box -> ObjectCollision naming it"),
+        pytest.param((LOW,), placed("box", 0.5, CUBE, (0, 0, 0.12)),
+                     "low", id="a 0.5 kg box 3 cm into another -> ObjectCollision naming it"),
+    ],
+)  # fmt: skip
+def test_an_object_that_would_be_thrown_out_of_an_overlap_is_refused(
+    world: armfleet.World, physics: int, before: Sequence[Placed], new: Placed, other: str
+) -> None:
+    for name, mass, size, at in before:
+        world.add_object(name, "box", size=size, mass=mass, at=at)
+    bodies = p.getNumBodies(physicsClientId=world.physics_client)
+    name, mass, size, at = new
+    with pytest.raises(ObjectCollision, match=f"it would overlap {other} there") as raised:
+        world.add_object(name, "box", size=size, mass=mass, at=at)
+    assert raised.value.distance_m < -RESTING_OVERLAP_M and raised.value.other == other
+    assert list(world.objects) == [b[0] for b in before]
+    assert p.getNumBodies(physicsClientId=world.physics_client) == bodies
+
+
+def test_a_moving_mesh_placed_exactly_on_the_floor_is_resting(
+    world: armfleet.World, tmp_path: Path
+) -> None:
+    """A moving mesh collides as its convex hull, 1 mm of margin included: placed with its
+    bottom face on the floor it overlaps it by that 1 mm, and must still be accepted."""
+    corners = [(x, y, z) for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (0.0, 0.1)]
+    faces = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    cube = tmp_path / "cube.obj"
+    cube.write_text(
+        "".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+        + "".join(f"f {a} {b} {c}\nf {a} {c} {d}\n" for a, b, c, d in faces)
+    )
+    mug = world.add_object("mug", "mesh", mesh=cube, mass=0.5, at=(0, 0, 0))
+    world.run(0.5)
+    assert np.linalg.norm(mug.position) < RESTING_OVERLAP_M  # pushed out by its margin only
+
+
+# -- a FleetSpec built in Python goes through the same check as a spec file ------------------
+MITT = object_spec("mitt", "box", size=CUBE, mass=0.0, at=(0.307, 0.0, 0.59))  # bob's hand
+
+
+def box_spec(name: str, mass: float, at: Sequence[float]) -> ObjectSpec:
+    return object_spec(name, "box", size=CUBE, mass=mass, at=at)
+
+
+@pytest.mark.parametrize(
+    ("spec", "error", "says"),
+    [
+        pytest.param(
+            FleetSpec(arms=(ArmSpec("bob"), ArmSpec("toby", pose=SpawnPose(0.3, 0.0)))),
+            StartPoseCollision, "toby would touch bob at its start pose",
+            id="Pandas 0.3 m apart -> StartPoseCollision, no world",
+        ),
+        pytest.param(
+            FleetSpec(arms=(ArmSpec("bob"),), objects=(MITT,)),
+            StartPoseCollision, "bob would touch mitt at its start pose",
+            id="a static box in bob's hand -> StartPoseCollision, no world",
+        ),
+        pytest.param(
+            FleetSpec(
+                arms=(ArmSpec("bob"),),
+                objects=(box_spec("crate", 0.0, (2, 0, 0.05)), box_spec("cup", 0.5, (2, 0, 0.1))),
+            ),
+            ObjectCollision, "object 'cup': at: it would overlap crate there",
+            id="a 0.5 kg box half into a static one -> ObjectCollision, no world",
+        ),
+        pytest.param(
+            FleetSpec(arms=(ArmSpec("bob"), ArmSpec("bob", pose=SpawnPose(3.0, 0.0)))),
+            ArmfleetError, "'bob'",
+            id="one name twice -> the world's name error, no world",
+        ),
+    ],
+)  # fmt: skip
+def test_a_fleet_spec_from_python_is_checked_before_its_world_exists(
+    spec: FleetSpec, error: type[ArmfleetError], says: str
+) -> None:
+    worlds: list[armfleet.World] = []
+    with pytest.raises(error, match=re.escape(says)):
+        armfleet.launch(spec, viewer=False, before_spawn=worlds.append)
+    assert not worlds  # no world was created: nothing came up, nothing was recorded

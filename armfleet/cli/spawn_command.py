@@ -17,6 +17,7 @@ from armfleet.errors import UnknownModel
 from armfleet.names import ARM_NAME_PATTERN, check_arm_name
 from armfleet.spawn_pose import AT_SYNTAX, SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
+from armfleet.spec.scene_rehearsal import rehearse
 
 
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -105,7 +106,11 @@ def spec_from_arguments(args: argparse.Namespace, models: ModelLibrary) -> Fleet
 
 def run(args: argparse.Namespace) -> int:
     check_run_arguments(args)
-    spec = spec_from_arguments(args, ModelLibrary())
+    models = ModelLibrary()
+    spec = spec_from_arguments(args, models)
+    # The whole command-line fleet, as a spec is checked, before any world is asked:
+    # no arm comes up when another of them would be refused.
+    rehearse(spec, models)
     client = running_world(args)
     if client is None:
         return run_fleet(spec, args)

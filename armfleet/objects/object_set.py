@@ -10,6 +10,7 @@ from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.errors import UnknownObject
 from armfleet.lifetime import Lifetime
+from armfleet.object_clearance import place_clear_object
 from armfleet.objects.object_frames import ObjectFramePublisher
 from armfleet.objects.object_spec import ObjectSpec
 from armfleet.objects.world_object import WorldObject
@@ -54,8 +55,15 @@ class ObjectSet:
         return self._objects[name]
 
     def add(self, spec: ObjectSpec, stamp: float) -> WorldObject:
-        """Make ``spec``'s body and frame at simulated time ``stamp`` [s] (name already checked)."""
-        obj = WorldObject(spec, self._client, self._teleported, self._lifetime)
+        """Make ``spec``'s body and frame at simulated time ``stamp`` [s] (name already checked).
+
+        Raises:
+            ObjectCollision: it would touch an arm or overlap the floor or an object
+                (:mod:`armfleet.object_clearance`); nothing was added.
+        """
+        obj = place_clear_object(
+            self._client, spec, self._contacts.neighbours(), self._teleported, self._lifetime
+        )
         self._objects[obj.name] = obj
         self._contacts.add_object(obj.name, obj.body_id, static=obj.is_static)
         if obj.is_static:

@@ -1,21 +1,29 @@
-"""A launch spec's scene, rehearsed before any world exists: frame owners and start clearance.
+"""A fleet's scene, rehearsed before any world exists: names, frame owners and clearance.
 
 The world refuses an arm whose frame another body owns
 (:mod:`armfleet.frame_registry`) or that would touch something at its start
-configuration (:mod:`armfleet.start_clearance`). A spec that ``--check`` calls
-ok must not be refused later, half brought up; so the spec's arms and objects
-go through the very same two rules here, in a scratch PyBullet client (DIRECT,
-no controllers, no time) with its own floor and contact monitor:
+configuration (:mod:`armfleet.start_clearance`), and an object that would touch
+an arm or overlap the floor or an object (:mod:`armfleet.object_clearance`). A
+fleet that passes here must not be refused later, half brought up; so every
+launch (:func:`armfleet.launch`, whether the spec comes from a file, from Python
+or from ``armfleet spawn``'s command line) and every ``launch --check`` puts the
+fleet's arms and objects through the very same rules first, in a scratch
+PyBullet client (DIRECT, no controllers, no time) with its own floor and
+contact monitor:
 
 1. every arm claims its frames, in order, then every object its own (an
    object named like an arm's frame is refused at the object's line);
-2. the objects are placed, then the arms one by one at their start
-   configurations, each checked against itself, the floor, the objects and the
-   arms placed before it.
+2. the objects are placed, each checked against the floor and the objects
+   before it, then the arms one by one at their start configurations, each
+   checked against itself, the floor, the objects and the arms placed before it.
 
 Objects go in before the arms here, although ``launch`` adds them after the
-arms are ready: what is asked is whether the finished scene is clear, and an
-arm standing inside a table is as wrong after its bring-up as before.
+arms are ready: what is asked is whether the finished scene is clear, and the
+rules judge an arm and an object the same whichever comes first.
+
+:class:`SceneRehearsal` raises the world's own errors;
+:class:`LocatedRehearsal` turns them into a :class:`SpecError` at the line of a
+spec file to change.
 
 Cost: about 12 ms per Panda (expansion, kinematics, loading the body), so
 0.4 s for the 30-arm grid.
@@ -29,19 +37,26 @@ from typing import NoReturn
 
 import pybullet as p
 
-from armfleet.arm_assembly import start_positions
+from armfleet.arm_assembly import check_controller_parameters, start_positions
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.description import ArmDescription, ModelLibrary
-from armfleet.errors import ArmfleetError, StartPoseCollision
+from armfleet.errors import (
+    ArmfleetError,
+    NameInUse,
+    ObjectCollision,
+    ObjectError,
+    StartPoseCollision,
+)
 from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
 from armfleet.kinematics import ArmKinematics
 from armfleet.located_yaml import LocatedDict
 from armfleet.messages import FloatArray
+from armfleet.names import check_arm_name
+from armfleet.object_clearance import place_clear_object
 from armfleet.objects.object_spec import ObjectSpec
-from armfleet.objects.world_object import WorldObject
-from armfleet.spec.fleet_spec import ArmSpec
+from armfleet.spec.fleet_spec import ArmSpec, FleetSpec
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.start_clearance import load_clear_body
 
@@ -49,15 +64,123 @@ from armfleet.start_clearance import load_clear_body
 @dataclass(frozen=True)
 class _PlannedArm:
     spec: ArmSpec
-    entry: LocatedDict
-    field: str
     description: ArmDescription
     kinematics: ArmKinematics
     start: FloatArray
 
 
 class SceneRehearsal:
-    """The scratch world of one spec check; use it in a ``with`` block.
+    """The scratch world of one check; use it in a ``with`` block.
+
+    Args:
+        models: the model library the arms' models come from (the shipped one by default).
+    """
+
+    def __init__(self, models: ModelLibrary | None = None) -> None:
+        self._models = models or ModelLibrary()
+        self._client: int = p.connect(p.DIRECT)
+        self._contacts = ContactMonitor(
+            self._client, create_ground(self._client), Bus(), lambda contact, deeper: None
+        )
+        self._frames = FrameRegistry()
+        self._arms: dict[str, _PlannedArm] = {}
+        self._objects: list[str] = []
+
+    def add_arm(self, arm: ArmSpec) -> None:
+        """Check the arm as :meth:`armfleet.World.spawn` would, and claim its frames.
+
+        Raises:
+            ArmfleetError: the world's error: a bad or repeated name, an unknown
+                model, bad initial positions or controller parameters, or a frame
+                another arm owns (:class:`FrameInUse`).
+        """
+        check_arm_name(arm.name, self._arms)
+        check_controller_parameters(
+            {name: c.parameters for name, c in arm.controllers.items()},
+            {name: c.file for name, c in arm.controllers.items() if c.file},
+        )
+        description = self._models.expand(arm.model, f"{arm.name}_", arm.pose)
+        kinematics = ArmKinematics(description.urdf, description.tool0)
+        start = start_positions(arm.name, kinematics, description.home, arm.initial_positions)
+        self._frames.claim(FrameOwner.arm(arm.name), arm_frames(kinematics))
+        self._arms[arm.name] = _PlannedArm(arm, description, kinematics, start)
+
+    def add_object(self, obj: ObjectSpec) -> None:
+        """Claim the frame of ``obj`` and place it, if it is clear of the floor and the
+        objects placed before it.
+
+        Raises:
+            NameInUse: an arm or an object has its name.
+            FrameInUse: an arm owns a frame named like it.
+            ObjectCollision: it would overlap the floor or an object.
+        """
+        if obj.name in self._arms or obj.name in self._objects:
+            kind = "an arm" if obj.name in self._arms else "an object"
+            raise NameInUse(obj.name, kind, list(self._arms), self._objects)
+        owner = FrameOwner.object(obj.name)
+        self._frames.claim(owner, (obj.name,))
+        try:
+            body = place_clear_object(self._client, obj, self._contacts.neighbours())
+        except BaseException:
+            self._frames.release(owner)
+            raise
+        self._contacts.add_object(obj.name, body.body_id, static=obj.is_static)
+        self._objects.append(obj.name)
+
+    def place_arm(self, name: str) -> None:
+        """Place the arm ``name`` (added before) at its start configuration, if it
+        touches nothing there: itself, the floor, the objects and the arms placed before.
+
+        Raises:
+            StartPoseCollision: naming what the arm would touch.
+        """
+        arm = self._arms[name]
+        body = load_clear_body(
+            self._client,
+            name,
+            arm.description.urdf,
+            arm.kinematics.joint_names,
+            arm.start,
+            arm.description.ignored_contacts,
+            self._contacts.neighbours(),
+        )
+        self._contacts.add_arm(name, body)
+
+    def close(self) -> None:
+        p.disconnect(physicsClientId=self._client)
+
+    def __enter__(self) -> SceneRehearsal:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def rehearse(spec: FleetSpec, models: ModelLibrary | None = None) -> None:
+    """Raise the error the world would raise bringing up ``spec``, before any world exists.
+
+    Raises:
+        ArmfleetError: the first arm or object the world would refuse, with the
+            world's own error (:class:`StartPoseCollision`, :class:`ObjectCollision`,
+            :class:`FrameInUse`, ...).
+    """
+    with SceneRehearsal(models) as scene:
+        for arm in spec.arms:
+            scene.add_arm(arm)
+        for obj in spec.objects:
+            scene.add_object(obj)
+        for arm in spec.arms:
+            scene.place_arm(arm.name)
+
+
+class LocatedRehearsal:
+    """:class:`SceneRehearsal` for a spec file: each refusal is a :class:`SpecError` at
+    the line to change. Use it in a ``with`` block.
 
     Args:
         reader: the spec's reader (errors name its file and lines).
@@ -66,42 +189,37 @@ class SceneRehearsal:
 
     def __init__(self, reader: SpecReader, models: ModelLibrary) -> None:
         self._reader = reader
-        self._models = models
-        self._client: int = p.connect(p.DIRECT)
-        self._contacts = ContactMonitor(
-            self._client, create_ground(self._client), Bus(), lambda contact, deeper: None
-        )
-        self._frames = FrameRegistry()
-        self._arms: list[_PlannedArm] = []
+        self._scene = SceneRehearsal(models)
+        self._arms: list[tuple[ArmSpec, LocatedDict, str]] = []
 
     def add_arm(self, arm: ArmSpec, entry: LocatedDict, field: str) -> None:
         """Claim the frames of ``arm`` (checked by :func:`check_fleet` already).
 
         Raises:
-            SpecError: at the arm's name, if another arm owns one of its frames.
+            SpecError: at the arm's name (or initial positions), if the world would refuse it.
         """
-        description = self._models.expand(arm.model, f"{arm.name}_", arm.pose)
-        kinematics = ArmKinematics(description.urdf, description.tool0)
         try:
-            start = start_positions(arm.name, kinematics, description.home, arm.initial_positions)
-            self._frames.claim(FrameOwner.arm(arm.name), arm_frames(kinematics))
+            self._scene.add_arm(arm)
         except ArmfleetError as exc:
             key = "initial_positions" if "initial_positions" in entry else "name"
             self._fail(entry, field, key, exc)
-        self._arms.append(_PlannedArm(arm, entry, field, description, kinematics, start))
+        self._arms.append((arm, entry, field))
 
     def add_object(self, obj: ObjectSpec, entry: LocatedDict, field: str) -> None:
         """Claim the frame of ``obj`` and place it.
 
         Raises:
-            SpecError: at the object's name, if an arm owns a frame named like it.
+            SpecError: at the object's pose (``at_m``) if it would overlap the floor or
+                an object placed before it; at its mesh if PyBullet cannot load it; at
+                its name if an arm owns a frame named like it.
         """
         try:
-            self._frames.claim(FrameOwner.object(obj.name), (obj.name,))
+            self._scene.add_object(obj)
         except ArmfleetError as exc:
-            self._fail(entry, field, "name", exc)
-        body = WorldObject(obj, self._client)
-        self._contacts.add_object(obj.name, body.body_id, static=obj.is_static)
+            keys = ["at_m"] if isinstance(exc, ObjectCollision) else []
+            keys += ["mesh"] if isinstance(exc, ObjectError) and exc.field == "mesh" else []
+            given = [k for k in keys if k in entry]
+            self._fail(entry, field, given[0] if given else "name", exc)
 
     def place_arms(self) -> None:
         """Place the arms in order, each at its start configuration, if it touches nothing.
@@ -110,33 +228,24 @@ class SceneRehearsal:
             SpecError: at the arm's pose (``at_m``, or the grid's ``spacing_m``), naming
                 what the arm would touch; at its ``initial_positions`` if it is itself.
         """
-        for arm in self._arms:
+        for arm, entry, field in self._arms:
             try:
-                body = load_clear_body(
-                    self._client,
-                    arm.spec.name,
-                    arm.description.urdf,
-                    arm.kinematics.joint_names,
-                    arm.start,
-                    arm.description.ignored_contacts,
-                    self._contacts.neighbours(),
-                )
+                self._scene.place_arm(arm.name)
             except ArmfleetError as exc:
                 # Folded into itself: its initial positions; touching something else: its pose.
-                itself = isinstance(exc, StartPoseCollision) and exc.other == arm.spec.name
+                itself = isinstance(exc, StartPoseCollision) and exc.other == arm.name
                 keys = ["initial_positions"] if itself else []
                 keys += ["at_m", "spacing_m", "initial_positions"]
-                given = [k for k in keys if k in arm.entry]
-                self._fail(arm.entry, arm.field, given[0] if given else "name", exc)
-            self._contacts.add_arm(arm.spec.name, body)
+                given = [k for k in keys if k in entry]
+                self._fail(entry, field, given[0] if given else "name", exc)
 
     def _fail(self, entry: LocatedDict, field: str, key: str, exc: ArmfleetError) -> NoReturn:
         raise self._reader.error(entry.line_of(key), f"{field}.{key}", str(exc)) from None
 
     def close(self) -> None:
-        p.disconnect(physicsClientId=self._client)
+        self._scene.close()
 
-    def __enter__(self) -> SceneRehearsal:
+    def __enter__(self) -> LocatedRehearsal:
         return self
 
     def __exit__(

@@ -40,7 +40,7 @@ from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
 from armfleet.spec.object_entries import read_objects
-from armfleet.spec.scene_rehearsal import SceneRehearsal
+from armfleet.spec.scene_rehearsal import LocatedRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.time_step import MAX_DT_S, MIN_DT_S
@@ -114,7 +114,7 @@ def _spec_from(document: object, source: str, base_dir: Path | None) -> FleetSpe
     models = ModelLibrary()
     check_fleet(reader, arms, models)
     names = {arm.name for arm, _, _ in arms}
-    with SceneRehearsal(reader, models) as scene:  # frame owners, start clearance
+    with LocatedRehearsal(reader, models) as scene:  # frame owners, clearance
         for arm, entry, field in arms:
             scene.add_arm(arm, entry, field)
         objects = read_objects(reader, top, base_dir, names, _orientation, scene.add_object)
