@@ -117,7 +117,7 @@ def recover(source: str | Path, output: str | Path | None = None) -> Recovery:
         if recovery.end is not FileEnd.COMPLETE and not recovery.records_after_header:
             reason = recovery.reason or "it ends before any record after its Header"
             raise DamagedRecording(source, f"{reason}; there is nothing to recover", 0)
-        os.link(temporary, target)  # fails, rather than replaces, if target appeared
+        _publish(Path(temporary), target)
     except FileExistsError:
         raise RecordingError(f"{target} appeared while recovering; nothing replaced") from None
     except OSError as exc:
@@ -126,6 +126,18 @@ def recover(source: str | Path, output: str | Path | None = None) -> Recovery:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(temporary)
     return recovery
+
+
+def _publish(finished: Path, target: Path) -> None:
+    """Give the finished file its name, never replacing a file that appeared meanwhile."""
+    try:
+        os.link(finished, target)  # raises FileExistsError rather than replacing
+    except FileExistsError:
+        raise
+    except OSError:  # a file system without hard links: check, then rename
+        if target.exists():
+            raise FileExistsError(target) from None
+        os.replace(finished, target)
 
 
 def _check_paths(source: Path, target: Path) -> None:
