@@ -1,6 +1,6 @@
 """Names, frame owners and start poses: each bad input refused in one line on every surface.
 
-Issue #14, items 1, 6, 7 and 11(c). One catalogue, four surfaces: the Python API
+Issue #14, items 1, 6, 7 (arms and objects) and 11(c). One catalogue, four surfaces: the Python API
 (``World.spawn`` / ``World.add_object``), the CLI against a running world
 (``armfleet spawn`` / ``add-object``, a subprocess), a launch spec through
 ``armfleet launch --check`` (a subprocess), and a live-API client. Each surface
@@ -26,6 +26,7 @@ from armfleet.errors import (
     ArmfleetError,
     FrameInUse,
     InvalidArmName,
+    ObjectCollision,
     ObjectError,
     StartPoseCollision,
 )
@@ -60,6 +61,7 @@ class NewObject:
     name: str
     at: tuple[float, float, float]
     size: tuple[float, float, float] = (0.1, 0.1, 0.1)
+    mass: float = 0.0
 
 
 SURFACES = frozenset({"python", "cli", "spec", "live"})
@@ -154,6 +156,31 @@ CASES = [
         ),
         id="joint4 at its limit folds the hand into link1 -> StartPoseCollision naming itself",
     ),
+    pytest.param(
+        Bad(
+            NewObject("mitt", (0.307, 0.0, 0.59)),
+            ObjectCollision,
+            "object 'mitt': at: it would touch bob there (bob_panda_",
+            spec_says="bob would touch mitt at its start pose",  # the spec places objects first
+        ),
+        id="static box around bob's hand (stopped bob) -> ObjectCollision naming bob",
+    ),
+    pytest.param(
+        Bad(
+            NewObject("cup", (3.0, -3.0, 0.5), mass=0.5),
+            ObjectCollision,
+            "object 'cup': at: it would overlap crate there",
+        ),
+        id="0.5 kg box inside the static crate (thrown out) -> ObjectCollision naming the crate",
+    ),
+    pytest.param(
+        Bad(
+            NewObject("cup", (6.0, 6.0, 0.0), mass=0.5),
+            ObjectCollision,
+            "object 'cup': at: it would overlap ground there (50.0 mm into it",
+        ),
+        id="0.5 kg box half into the floor (thrown up) -> ObjectCollision naming ground",
+    ),
 ]
 
 
@@ -172,7 +199,7 @@ def _try_python(world: armfleet.World, what: NewArm | NewObject) -> None:
     if isinstance(what, NewArm):
         world.spawn(what.name, what.model, what.at, initial_positions=what.initial_positions)
     else:
-        world.add_object(what.name, "box", size=what.size, mass=0.0, at=what.at)
+        world.add_object(what.name, "box", size=what.size, mass=what.mass, at=what.at)
 
 
 @pytest.mark.parametrize("bad", CASES)
@@ -223,7 +250,7 @@ def _cli_arguments(what: NewArm | NewObject) -> list[str]:
         at = ",".join(f"{v:g}" for v in what.at)
         return ["spawn", what.name, "--at", at, "--model", what.model]
     return [
-        "add-object", what.name, "box", "--size", *map(str, what.size), "--mass", "0",
+        "add-object", what.name, "box", "--size", *map(str, what.size), "--mass", str(what.mass),
         "--at", *map(str, what.at),
     ]  # fmt: skip
 
@@ -240,6 +267,18 @@ def test_cli(running: Running, bad: Bad) -> None:
     _assert_world_as_it_was(running)
 
 
+def test_cli_fleet_joining_a_world_is_checked_whole(running: Running) -> None:
+    """Two arms typed together, the second touching the first: neither is sent to the world
+    (the first used to come up, then the second was refused)."""
+    result = cli(running.runtime, "spawn", "p", "q", "--at", "6,0", "6.3,0")
+    assert result.returncode == 2, result
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert "q would touch p at its start pose" in lines[0], lines[0]
+    assert "joining" not in result.stdout and "[p]" not in result.stdout, result.stdout
+    _assert_world_as_it_was(running)
+
+
 @pytest.mark.parametrize("bad", CASES)
 def test_live_api(running: Running, bad: Bad) -> None:
     what = bad.what
@@ -247,7 +286,7 @@ def test_live_api(running: Running, bad: Bad) -> None:
         if isinstance(what, NewArm):
             client.spawn(what.name, what.model, what.at, initial_positions=what.initial_positions)
         else:
-            client.add_object(what.name, "box", size=what.size, mass=0.0, at=what.at)
+            client.add_object(what.name, "box", size=what.size, mass=what.mass, at=what.at)
     assert raised.value.kind == bad.error.__name__
     assert bad.says in str(raised.value) and "\n" not in str(raised.value)
     _assert_world_as_it_was(running)
@@ -271,7 +310,7 @@ def spec_text(what: NewArm | NewObject) -> str:
     for obj in objects:
         lines += [
             f"  - name: {obj.name}", "    shape: box", f"    size_m: {list(obj.size)}",
-            "    mass_kg: 0", f"    at_m: {list(obj.at)}",
+            f"    mass_kg: {obj.mass}", f"    at_m: {list(obj.at)}",
         ]  # fmt: skip
     return "\n".join(lines) + "\n"
 
