@@ -178,9 +178,11 @@ class PendingRequests:
                 if pending.finish is not None:
                     result = pending.finish(result)
             except Exception as exc:
-                self._outbox.reply_error(pending.peer, pending.request_id, exc)
+                if not pending.abandoned:
+                    self._outbox.reply_error(pending.peer, pending.request_id, exc)
                 continue
-            self._outbox.reply(pending.peer, pending.request_id, result)
+            if not pending.abandoned:
+                self._outbox.reply(pending.peer, pending.request_id, result)
 
     def next_deadline(self) -> float | None:
         """The earliest deadline of work not yet answered (monotonic) [s], or None."""
@@ -202,7 +204,9 @@ class PendingRequests:
     def cancel_client(self, peer: bytes) -> int:
         """Cancel the requests of ``peer``, which has gone (no reply: nobody would read it).
 
-        Work not started yet never runs; waits stop polling at the next step.
+        Work not started yet never runs; waits stop polling at the next step. Work
+        that ran already, or is running, with a ``finish`` (a subscription to register
+        or undo) is finished when done, and answered to nobody.
 
         Returns:
             How many requests were cancelled.
@@ -212,10 +216,11 @@ class PendingRequests:
             return 0
         mine = [key for key, pending in self._pending.items() if pending.peer == peer]
         for key in mine:
-            pending = self._pop(key)
-            assert pending is not None
+            pending = self._pending[key]
             pending.abandoned = True
-            pending.future.cancel()  # False once it runs (and a wait runs from the start)
+            # cancel() is False once the work runs (a wait runs from the start).
+            if pending.future.cancel() or pending.finish is None:
+                self._pop(key)
         return len(mine)
 
     def _pop(self, key: int) -> _Pending | None:
