@@ -172,13 +172,10 @@ def read_located(path: Path, source: str | None = None) -> Any:
     name = str(path) if source is None else source
     try:
         with path.open("rb") as stream:
-            data = stream.read(MAX_DOCUMENT_BYTES + 1)
+            data = stream.read(MAX_DOCUMENT_BYTES + 1)  # no more: the size is checked
     except OSError as exc:
         raise YamlDocumentError(name, 0, f"cannot be read ({exc.strerror})") from None
-    if len(data) > MAX_DOCUMENT_BYTES:
-        raise YamlDocumentError(name, 0, f"larger than {_size(MAX_DOCUMENT_BYTES)}; a YAML "
-                                "file armfleet reads holds at most that")  # fmt: skip
-    return load_located(decode_utf8(data, name), name)
+    return load_located(data, name)
 
 
 def decode_utf8(data: bytes, source: str) -> str:
@@ -210,17 +207,22 @@ def decode_utf8(data: bytes, source: str) -> str:
     return text
 
 
-def load_located(text: str, source: str = "<text>") -> Any:
+def load_located(text: str | bytes, source: str = "<text>") -> Any:
     """Parse YAML ``text``; mappings become :class:`LocatedDict`, sequences :class:`LocatedList`.
+
+    Bytes must be UTF-8 (:func:`decode_utf8`), as a file's must: PyYAML would otherwise
+    guess UTF-16 from a byte-order mark.
 
     Raises:
         YamlDocumentError: ``text`` is not one YAML document within the bounds of this
             module (too large, too deep, too many values once aliases are expanded, an
             alias inside itself, a value that cannot be built, or a syntax error), at its line.
     """
-    if len(text) > MAX_DOCUMENT_BYTES:
+    if len(text) > MAX_DOCUMENT_BYTES:  # bytes, or characters of text already decoded
         raise YamlDocumentError(source, 0, f"larger than {_size(MAX_DOCUMENT_BYTES)}; a YAML "
                                 "file armfleet reads holds at most that")  # fmt: skip
+    if isinstance(text, bytes):
+        text = decode_utf8(text, source)
     try:
         _check_nesting(yaml.parse(text, Loader=_LocatingLoader), source)
         loader = _LocatingLoader(text)  # a SafeLoader subclass: no arbitrary objects

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from armfleet.located_yaml import MAX_DEPTH, MAX_DOCUMENT_BYTES, MAX_NODES
-from armfleet.spec import SpecError, load_spec
+from armfleet.spec import SpecError, load_spec, parse_spec
 
 ARMFLEET = (sys.executable, "-m", "armfleet.cli.main")
 TIMEOUT_S = 120.0
@@ -240,6 +240,17 @@ def test_bad_spec_file_from_the_cli_is_one_line_exit_2(tmp_path: Path, case: Bad
     assert result.stdout == ""
     assert result.stderr.startswith("armfleet: error: ")
     check_message(result.stderr, spec, case)
+
+
+@pytest.mark.parametrize("case", BAD_SPECS)
+def test_bad_spec_bytes_through_parse_spec_are_the_same_error(case: BadSpec) -> None:
+    """The Python API's parse_spec follows the same rules for text given as bytes (PyYAML
+    alone would decode a UTF-16 byte-order mark instead of refusing it)."""
+    if case.controller_file is not None:
+        pytest.skip("the controller file is read from disk")
+    with pytest.raises(SpecError) as raised:
+        parse_spec(case.content, "cell.yaml", base_dir=Path("/specs"))
+    check_message(str(raised.value), Path("cell.yaml"), case)
 
 
 def test_what_stays_valid_within_the_bounds(tmp_path: Path) -> None:

@@ -79,8 +79,8 @@ def load_spec(name_or_path: str | Path) -> FleetSpec:
     return _spec_from(document, str(path), path.parent)
 
 
-def parse_spec(text: str, source: str, base_dir: Path | None = None) -> FleetSpec:
-    """Check ``text`` (YAML) as a launch spec from ``source``.
+def parse_spec(text: str | bytes, source: str, base_dir: Path | None = None) -> FleetSpec:
+    """Check ``text`` (YAML; bytes must be UTF-8) as a launch spec from ``source``.
 
     Raises:
         SpecError: at the first problem, with its line (see :mod:`armfleet.located_yaml`
