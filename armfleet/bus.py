@@ -13,7 +13,10 @@ plotting, a recorder) cannot stop a robot. The one exception is a subscriber
 that owns its failures: the controllers' own command subscriptions pass
 ``on_error`` (their controller's :meth:`~armfleet.controllers.Controller.fail`),
 because a command half-applied by a broken controller must put its arm in
-``error`` rather than be skipped.
+``error`` rather than be skipped. armfleet's other internal subscribers are
+passive and isolated like any listener: the robot_state_publisher (``/tf`` from
+``/<arm>/joint_states``), bring-up's first-state watch, the recorder, the
+viewer, and the live API's per-client queues.
 
 Topics can go away (:meth:`Bus.unadvertise`, when an arm is removed); their
 subscribers are told through ``on_gone``.

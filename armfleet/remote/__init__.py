@@ -14,6 +14,8 @@ from armfleet.remote.errors import (
     ProtocolError,
     RemoteError,
     RequestTimeout,
+    TooManyRequests,
+    TopicGone,
     UnknownTopic,
 )
 from armfleet.remote.remote_arm import RemoteArm
@@ -35,6 +37,8 @@ __all__ = [
     "RemoteSubscription",
     "RequestTimeout",
     "RunState",
+    "TooManyRequests",
+    "TopicGone",
     "TopicInfo",
     "UnknownTopic",
     "WorldInfo",

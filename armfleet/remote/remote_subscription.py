@@ -39,7 +39,9 @@ class RemoteSubscription:
 
     @property
     def error(self) -> BaseException | None:
-        """Why the subscription ended on its own (the world closed or went silent)."""
+        """Why the subscription ended on its own: the world closed or went silent
+        (:class:`ConnectionLost`), or its topic went away (:class:`TopicGone`, e.g. its
+        arm was removed)."""
         return self._local.error
 
     def wait_ended(self, timeout: float | None = None) -> bool:
