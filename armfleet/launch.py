@@ -6,6 +6,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from armfleet.arm import Arm
+from armfleet.description import ModelLibrary
 from armfleet.objects import ObjectSpec, WorldObject
 from armfleet.spec import FleetSpec, load_spec
 from armfleet.spec.fleet_spec import ArmSpec
@@ -71,14 +72,16 @@ def launch(
         ArmfleetError: the world's own error for the first arm or object of a
             :class:`FleetSpec` it would refuse (e.g. :class:`StartPoseCollision`).
     """
+    models = ModelLibrary()  # one for the check and the world: its templates are made once
     if isinstance(spec, FleetSpec):
-        rehearse(spec)  # a spec file was rehearsed as it was read
+        rehearse(spec, models)  # a spec file was rehearsed as it was read
     else:
         spec = load_spec(spec)
     settings = spec.world
     world = World(
         dt=settings.dt_s,
         gravity=settings.gravity_m_s2,
+        models=models,
         viewer=settings.viewer if viewer is None else viewer,
         viewer_port=viewer_port,
     )
