@@ -142,8 +142,8 @@ CASES = [
     pytest.param(
         lambda t: [{1: 2, "id": 1, "op": "info"}],
         "ProtocolError",
-        "",
-        id="map with a non-text key -> ProtocolError",
+        "not allowed for map key",
+        id="map with a non-text key -> ProtocolError naming the map key",
     ),
     pytest.param(
         lambda t: [sub(t, sub=7)],
