@@ -408,3 +408,53 @@ def test_a_fleet_spec_from_python_is_checked_before_its_world_exists(
     with pytest.raises(error, match=re.escape(says)):
         armfleet.launch(spec, viewer=False, before_spawn=worlds.append)
     assert not worlds  # no world was created: nothing came up, nothing was recorded
+
+
+@pytest.mark.parametrize("mass", [0.0, 0.5], ids=["static box", "0.5 kg box"])
+def test_an_arm_and_an_object_get_one_verdict_whichever_comes_first(mass: float) -> None:
+    """What lets a spec's check (objects, then arms) agree with launch (arms, then objects)."""
+    verdicts: dict[str, list[bool]] = {"object last": [], "arm last": []}
+    with armfleet.World() as arm_first, armfleet.World() as object_first:
+        arm_first.spawn("bob", at=(0, 0))
+        flange = arm_first.tf.world_pose("bob_tool0")[:3, 3]
+        for dx in (0.0, 0.1, 0.13, 0.14, 0.15, 0.16, 0.2, 0.3):
+            at = tuple(flange + np.array([dx, 0.0, 0.0]))
+            try:
+                arm_first.add_object("box", "box", size=CUBE, mass=mass, at=at)
+                arm_first.remove_object("box")
+                verdicts["object last"].append(True)
+            except ObjectCollision:
+                verdicts["object last"].append(False)
+            object_first.add_object("box", "box", size=CUBE, mass=mass, at=at)
+            try:
+                object_first.spawn("bob", at=(0, 0))
+                object_first.remove("bob")
+                verdicts["arm last"].append(True)
+            except StartPoseCollision:
+                verdicts["arm last"].append(False)
+            object_first.remove_object("box")
+    assert verdicts["object last"] == verdicts["arm last"]
+    assert True in verdicts["arm last"] and False in verdicts["arm last"]
+
+
+@pytest.mark.parametrize("overlap_m", [0.0, 1e-3, RESTING_OVERLAP_M, 10e-3])
+def test_the_solver_only_pushes_a_resting_overlap_out_and_throws_a_deeper_one(
+    physics: int, overlap_m: float
+) -> None:
+    """Plain PyBullet, no armfleet: a 0.5 kg box released ``overlap_m`` into the floor."""
+    p.setGravity(0, 0, -9.81, physicsClientId=physics)
+    p.setTimeStep(0.001, physicsClientId=physics)
+    floor = p.createCollisionShape(p.GEOM_BOX, halfExtents=[5, 5, 0.5], physicsClientId=physics)
+    p.createMultiBody(0.0, floor, basePosition=[0, 0, -0.5], physicsClientId=physics)
+    start = SIDE_M / 2 - overlap_m
+    box = plain_box(physics, (0.0, 0.0, start), 0.5)
+    highest = start
+    for _ in range(500):
+        p.stepSimulation(physicsClientId=physics)
+        z = p.getBasePositionAndOrientation(box, physicsClientId=physics)[0][2]
+        highest = max(highest, z)
+    rise = highest - start
+    if overlap_m <= RESTING_OVERLAP_M:
+        assert rise <= overlap_m + 1e-4  # out by the overlap, 0.1 mm of slack, no more
+    else:
+        assert rise > 2 * overlap_m  # thrown (measured: 33 mm for 10 mm)
