@@ -458,3 +458,27 @@ def test_the_solver_only_pushes_a_resting_overlap_out_and_throws_a_deeper_one(
         assert rise <= overlap_m + 1e-4  # out by the overlap, 0.1 mm of slack, no more
     else:
         assert rise > 2 * overlap_m  # thrown (measured: 33 mm for 10 mm)
+
+
+def test_a_clear_fleet_spec_from_python_comes_up_whole() -> None:
+    """The check refuses nothing the world accepts: poses as plain tuples (which spawn
+    takes), a table under one arm's base, a box resting on the table beside it, a box on
+    the floor."""
+    spec = FleetSpec(
+        arms=(
+            ArmSpec("bob", pose=(0.0, 0.0, 0.4)),  # type: ignore[arg-type]
+            ArmSpec("toby", pose=SpawnPose(1.2, 0.0, 0.0, 180.0)),
+        ),
+        objects=(
+            object_spec("table", "box", size=(0.4, 0.4, 0.4), mass=0.0, at=(0, 0, 0.2)),
+            box_spec("cube", 0.5, (0.0, 1.0, 0.05)),
+            box_spec("cup", 0.5, (-0.14, 0.14, 0.45)),  # beside bob's base
+        ),
+    )
+    world = armfleet.launch(spec, viewer=False)
+    try:
+        assert list(world.arms) == ["bob", "toby"]
+        assert list(world.objects) == ["table", "cube", "cup"]
+        assert_nobody_stopped(world, 0)
+    finally:
+        world.close()

@@ -56,6 +56,7 @@ from armfleet.messages import FloatArray
 from armfleet.names import check_arm_name
 from armfleet.object_clearance import place_clear_object
 from armfleet.objects.object_spec import ObjectSpec
+from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_spec import ArmSpec, FleetSpec
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.start_clearance import load_clear_body
@@ -95,11 +96,12 @@ class SceneRehearsal:
                 another arm owns (:class:`FrameInUse`).
         """
         check_arm_name(arm.name, self._arms)
+        pose = SpawnPose.from_values(arm.pose)  # as spawn takes it: (x, y[, z[, yaw]]) too
         check_controller_parameters(
             {name: c.parameters for name, c in arm.controllers.items()},
             {name: c.file for name, c in arm.controllers.items() if c.file},
         )
-        description = self._models.expand(arm.model, f"{arm.name}_", arm.pose)
+        description = self._models.expand(arm.model, f"{arm.name}_", pose)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(arm.name, kinematics, description.home, arm.initial_positions)
         self._frames.claim(FrameOwner.arm(arm.name), arm_frames(kinematics))
