@@ -22,6 +22,7 @@ from armfleet.errors import (
     UnknownArm,
     UnreachablePose,
 )
+from armfleet.flags import flag
 from armfleet.gripper import Gripper
 from armfleet.inverse_kinematics import InverseKinematics, link_frame, world_goal
 from armfleet.kinematics import ArmKinematics
@@ -34,6 +35,7 @@ from armfleet.messages import (
     JointState,
     Positions,
 )
+from armfleet.real_numbers import STAMP_VALID, real_number
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
@@ -45,7 +47,10 @@ class Arm:
     Created by :meth:`armfleet.World.spawn`; not meant to be built by hand.
     After ``world.remove(name)`` its methods raise :class:`~armfleet.errors.UnknownArm`,
     after ``world.close()`` :class:`~armfleet.errors.WorldClosed` (see
-    :mod:`armfleet.lifetime`); its name, model, pose and joints stay readable.
+    :mod:`armfleet.lifetime`), and so do its parts that live in the world (``body``,
+    ``kinematics``, the controllers, ``state_publisher``, ``ik``). What it *is* stays
+    readable: ``name``, ``namespace``, ``model``, ``pose``, ``joint_names``,
+    ``joint_limits``, ``has_gripper``, ``description``.
     """
 
     def __init__(
@@ -69,16 +74,16 @@ class Arm:
         #: Ended when the arm leaves its world (or the world closes).
         self._lifetime = lifetime or Lifetime(lambda: UnknownArm(name, []))
         self._pose = pose
-        self.description = description
-        self.body = body
-        self.kinematics = kinematics
+        self._description = description
+        self._body = body
+        self._kinematics = kinematics
         self._bus = bus
-        self.controller_manager = controller_manager
-        self.broadcaster = broadcaster
-        self.position_controller = position_controller
-        self.state_publisher = state_publisher
+        self._controller_manager = controller_manager
+        self._broadcaster = broadcaster
+        self._position_controller = position_controller
+        self._state_publisher = state_publisher
         self._safety = safety
-        self.gripper_controller = gripper_controller
+        self._gripper_controller = gripper_controller
         self._gripper = (
             None
             if gripper_controller is None
@@ -86,9 +91,58 @@ class Arm:
         )
         #: World pose (4x4) of any frame the world knows, for Cartesian goals.
         self._frame_pose = frame_pose
-        #: Inverse kinematics of this arm (its own Pinocchio data).
-        self.ik = InverseKinematics(kinematics)
-        self._linear = LinearPathPlanner(name, self.ik, position_controller)
+        self._ik = InverseKinematics(kinematics)
+        self._linear = LinearPathPlanner(name, self._ik, position_controller)
+
+    # -- what a handle is: readable after close or remove ------------------------------
+    @property
+    def description(self) -> ArmDescription:
+        """The expanded model (URDF, SRDF, frames): what the arm is, readable for good."""
+        return self._description
+
+    # -- the arm in its world: raise after close or remove --------------------------------
+    @property
+    @while_alive
+    def body(self) -> ArmBody:
+        """Its PyBullet body (for inspection; command it through the controllers)."""
+        return self._body
+
+    @property
+    @while_alive
+    def kinematics(self) -> ArmKinematics:
+        """Its Pinocchio model and data (the data follows the live arm)."""
+        return self._kinematics
+
+    @property
+    @while_alive
+    def controller_manager(self) -> ControllerManager:
+        return self._controller_manager
+
+    @property
+    @while_alive
+    def broadcaster(self) -> JointStateBroadcaster:
+        return self._broadcaster
+
+    @property
+    @while_alive
+    def position_controller(self) -> PositionController:
+        return self._position_controller
+
+    @property
+    @while_alive
+    def state_publisher(self) -> RobotStatePublisher:
+        return self._state_publisher
+
+    @property
+    @while_alive
+    def gripper_controller(self) -> GripperController | None:
+        return self._gripper_controller
+
+    @property
+    @while_alive
+    def ik(self) -> InverseKinematics:
+        """Inverse kinematics of this arm (its own Pinocchio data)."""
+        return self._ik
 
     @property
     def lifetime(self) -> Lifetime:
@@ -105,7 +159,7 @@ class Arm:
 
     @property
     def model(self) -> str:
-        return self.description.model
+        return self._description.model
 
     @property
     def pose(self) -> SpawnPose:
@@ -115,12 +169,12 @@ class Arm:
     @property
     def joint_names(self) -> tuple[str, ...]:
         """Prefixed names of the joints :meth:`move_to` controls, base to tool."""
-        return self.position_controller.joint_names
+        return self._position_controller.joint_names
 
     @property
     def joint_limits(self) -> tuple[FloatArray, FloatArray]:
         """(lower, upper) position limits of :attr:`joint_names` [rad or m]."""
-        return self.position_controller.lower.copy(), self.position_controller.upper.copy()
+        return self._position_controller.lower.copy(), self._position_controller.upper.copy()
 
     @property
     @while_alive
@@ -142,7 +196,7 @@ class Arm:
     @while_alive
     def joint_state(self) -> JointState:
         """The latest message of ``/<name>/joint_states`` (every movable joint)."""
-        latest = self.broadcaster.latest
+        latest = self._broadcaster.latest
         assert latest is not None  # bring-up waits for the first message
         return latest
 
@@ -150,20 +204,26 @@ class Arm:
     @while_alive
     def positions(self) -> FloatArray:
         """Current positions of :attr:`joint_names`, read at the last step."""
-        positions: FloatArray = self.body.position[self.kinematics.arm_indices].copy()
+        positions: FloatArray = self._body.position[self._kinematics.arm_indices].copy()
         return positions
 
     @property
     @while_alive
     def is_moving(self) -> bool:
         """Whether the position controller's reference is still in motion."""
-        return self.position_controller.is_moving
+        return self._position_controller.is_moving
 
     @while_alive
     def status(self, stamp: float) -> ArmStatus:
-        """What the arm is doing now (also published on ``/<name>/status``)."""
-        controller = self.position_controller
-        fault = self.controller_manager.fault
+        """What the arm is doing now (also published on ``/<name>/status``), stamped
+        ``stamp`` [s of simulated time].
+
+        Raises:
+            InvalidNumber: ``stamp`` is not a finite number >= 0 (text, bool, None).
+        """
+        stamp = real_number(stamp, f"{self._name}: stamp", STAMP_VALID, low=0.0)
+        controller = self._position_controller
+        fault = self._controller_manager.fault
         if fault is not None:
             mode, reason = ArmMode.ERROR, fault
         elif controller.stop_reason is not None:
@@ -189,7 +249,7 @@ class Arm:
     @while_alive
     def reset(self) -> None:
         """Leave ``error`` (restarting the controllers at the current pose) and any stop."""
-        self.controller_manager.reset()
+        self._controller_manager.reset()
         self._safety.reset_stop(self)
 
     @while_alive
@@ -204,10 +264,10 @@ class Arm:
             TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError,
             ProtectiveStopError, ArmFault: nothing is sent and the current motion goes on.
         """
-        values = self.position_controller.validate(positions)
-        if self.controller_manager.fault is not None:
-            raise ArmFault(self._name, self.controller_manager.fault)
-        plan = self.position_controller.plan(values)
+        values = self._position_controller.validate(positions)
+        if self._controller_manager.fault is not None:
+            raise ArmFault(self._name, self._controller_manager.fault)
+        plan = self._position_controller.plan(values)
         self._publish_command(values)
         return plan.duration
 
@@ -216,7 +276,7 @@ class Arm:
         """Follow ``plan`` to ``values``, made by ``position_controller.plan`` at this
         step (e.g. with a minimum duration, by :meth:`armfleet.World.move_together`)."""
         self._publish_command(values)  # for the record; the plan replaces its motion
-        self.position_controller.follow(plan)
+        self._position_controller.follow(plan)
 
     def _publish_command(self, values: FloatArray) -> None:
         self._bus.publish(
@@ -247,15 +307,15 @@ class Arm:
                 TargetLengthError, JointLimitError (seed).
         """
         goal, link_frame = self._resolve(pose, frame, link)
-        start = self.body.position.copy()
+        start = self._body.position.copy()
         if seed is not None:
-            start[self.kinematics.arm_indices] = self.position_controller.validate(seed)
-        solution = self.ik.solve(link_frame, goal, start)
+            start[self._kinematics.arm_indices] = self._position_controller.validate(seed)
+        solution = self._ik.solve(link_frame, goal, start)
         if not solution.converged:
             raise UnreachablePose(
                 self._name, link, solution.position_error_m, solution.rotation_error_rad
             )
-        positions: FloatArray = solution.positions[self.kinematics.arm_indices].copy()
+        positions: FloatArray = solution.positions[self._kinematics.arm_indices].copy()
         return positions
 
     @while_alive
@@ -273,9 +333,10 @@ class Arm:
             UnreachablePose, ArmInMotion, and the errors of :meth:`solve_ik` and
             :meth:`move_to`.
         """
-        if self.controller_manager.fault is not None:
-            raise ArmFault(self._name, self.controller_manager.fault)
-        controller = self.position_controller
+        linear = flag(linear, "linear")
+        if self._controller_manager.fault is not None:
+            raise ArmFault(self._name, self._controller_manager.fault)
+        controller = self._position_controller
         if controller.stop_reason is not None:
             raise ProtectiveStopError(self._name, controller.stop_reason)
         if not linear:
@@ -283,8 +344,8 @@ class Arm:
         if controller.is_moving or controller.trajectory is None:
             raise ArmInMotion(self._name, "a linear move")
         goal, link_frame = self._resolve(pose, frame, link)
-        start = self.body.position.copy()
-        start[self.kinematics.arm_indices] = controller.trajectory.position
+        start = self._body.position.copy()
+        start[self._kinematics.arm_indices] = controller.trajectory.position
         motion = self._linear.plan(link_frame, link, start, goal)
         controller.check_samples(motion)
         self._publish_command(motion.position[-1])  # for the record; the samples replace it
@@ -293,7 +354,7 @@ class Arm:
 
     def _resolve(self, pose: Any, frame: str, link: str) -> tuple[pin.SE3, str]:
         """The world pose wanted for ``link`` and the link's prefixed frame name."""
-        name = link_frame(self._name, self.kinematics, self.description.prefix, link)
+        name = link_frame(self._name, self._kinematics, self._description.prefix, link)
         return world_goal(pose, frame, self._frame_pose), name
 
     def __repr__(self) -> str:

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from armfleet.errors import ArmfleetError
+from armfleet.flags import flag
 
 logger = logging.getLogger("armfleet")
 
@@ -218,6 +219,8 @@ class Bus:
         Args:
             latch: keep the message and replay it to future subscribers.
         """
+        if latch is not False:
+            latch = flag(latch, "latch")
         expected = self._types.get(topic)
         if expected is None:
             self.advertise(topic, type(message))

@@ -170,6 +170,22 @@ class InvalidNumber(ArmfleetError):
         super().__init__(f"{argument} = {shown} is invalid; give {valid}")
 
 
+class InvalidFlag(ArmfleetError):
+    """A yes/no argument that is not a bool (``linear='no'`` would read as yes).
+
+    Attributes:
+        argument: its name (``"linear"``, ``"viewer"``).
+        value: what was given.
+    """
+
+    def __init__(self, argument: str, value: object) -> None:
+        self.argument, self.value = argument, value
+        shown = " ".join(repr(value).split())
+        if len(shown) > 60:
+            shown = shown[:57] + "..."
+        super().__init__(f"{argument} = {shown} is invalid; give True or False")
+
+
 class ObjectError(ArmfleetError):
     """A scene object that cannot be made as asked (shape, size, mass, mesh file, name...).
 

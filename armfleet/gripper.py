@@ -6,7 +6,7 @@ from armfleet.bus import Bus
 from armfleet.controllers.gripper_controller import GripperController
 from armfleet.lifetime import Lifetime, while_alive
 from armfleet.messages import GripperCommand, GripperMode, GripperState
-from armfleet.real_numbers import real_number
+from armfleet.real_numbers import STAMP_VALID, real_number
 
 
 class Gripper:
@@ -104,7 +104,13 @@ class Gripper:
 
     @while_alive
     def state(self, stamp: float = 0.0) -> GripperState:
-        """The gripper's state (as published on ``/<arm>/gripper_controller/state``)."""
+        """The gripper's state (as published on ``/<arm>/gripper_controller/state``),
+        stamped ``stamp`` [s of simulated time].
+
+        Raises:
+            InvalidNumber: ``stamp`` is not a finite number >= 0 (text, bool, None).
+        """
+        stamp = real_number(stamp, f"{self._arm}: gripper stamp", STAMP_VALID, low=0.0)
         return self._controller.gripper_state(stamp)
 
     def __repr__(self) -> str:

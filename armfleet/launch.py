@@ -7,6 +7,7 @@ from pathlib import Path
 
 from armfleet.arm import Arm
 from armfleet.description import ModelLibrary
+from armfleet.flags import flag
 from armfleet.objects import ObjectSpec, WorldObject
 from armfleet.spec import FleetSpec, load_spec
 from armfleet.spec.fleet_spec import ArmSpec
@@ -72,6 +73,8 @@ def launch(
         ArmfleetError: the world's own error for the first arm or object of a
             :class:`FleetSpec` it would refuse (e.g. :class:`StartPoseCollision`).
     """
+    if viewer is not None:
+        viewer = flag(viewer, "viewer")  # before the scene is rehearsed
     models = ModelLibrary()  # one for the check and the world: its templates are made once
     if isinstance(spec, FleetSpec):
         rehearse(spec, models)  # a spec file was rehearsed as it was read

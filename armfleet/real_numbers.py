@@ -24,6 +24,9 @@ from armfleet.messages import FloatArray
 #: NumPy dtype kinds of real numbers: signed and unsigned integers, floats (not bool).
 _REAL_KINDS = "iuf"
 
+#: What a message stamp must be (``arm.status(stamp)``, ``gripper.state(stamp)``).
+STAMP_VALID = "a time >= 0 s (e.g. world.time)"
+
 
 def is_real(value: object) -> bool:
     """Whether ``value`` is one real number: an int, a float, a NumPy integer or

@@ -25,6 +25,7 @@ from armfleet.contact_monitor import ContactMonitor
 from armfleet.controllers.fleet_update import FleetUpdate
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, NameInUse, UnknownArm, WorldClosed
+from armfleet.flags import flag
 from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
 from armfleet.joint_memory import JointMemory
@@ -89,6 +90,7 @@ class World:
         viewer_port: int | None = None,
     ) -> None:
         dt = check_dt(dt)
+        viewer = flag(viewer, "viewer")
         if viewer_port is not None:
             PORT.check(viewer_port, "viewer_port")  # as the CLI's --viewer-port
         gravity = real_number(gravity, "gravity", "[-100, 100] m/s^2", low=-100.0, high=100.0)
@@ -469,6 +471,7 @@ class World:
             on_step: called after every step (e.g. for logging).
         """
         duration = RUN_DURATION_S.check(duration, "duration")  # as the CLI's --duration
+        realtime = flag(realtime, "realtime")
         steps = round(duration / self._dt)
         wall_start, sim_start = time.perf_counter(), self.time
         for _ in range(steps):

@@ -30,6 +30,7 @@ import armfleet
 from armfleet.description import ModelLibrary
 from armfleet.errors import (
     ArmfleetError,
+    InvalidFlag,
     InvalidNumber,
     ObjectError,
     ParameterError,
@@ -160,6 +161,53 @@ CASES = [
         lambda w, b: b.move_to_pose(tool0(w), link=7),
         UnknownFrame, "frame 7 not found", "links of bob:", "tool0",
         id="move_to_pose link not a string -> UnknownFrame listing the links",
+    ),
+    # -- yes/no flags: a bool, not whatever Python reads as true (armfleet.flags) ----------
+    case(
+        lambda w, b: b.move_to_pose(tool0(w), linear="no"),
+        InvalidFlag, "linear = 'no' is invalid; give True or False",
+        id="move_to_pose linear='no' -> InvalidFlag, not a straight-line move",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(tool0(w), linear=1),
+        InvalidFlag, "linear = 1 is invalid; give True or False",
+        id="move_to_pose linear=1, a number as a flag -> InvalidFlag",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(tool0(w), linear=None),
+        InvalidFlag, "linear = None is invalid; give True or False",
+        id="move_to_pose linear=None -> InvalidFlag, not a joint-space move",
+    ),
+    case(
+        lambda w, b: w.run(0.01, realtime="no"),
+        InvalidFlag, "realtime = 'no' is invalid; give True or False",
+        id="run realtime='no' -> InvalidFlag before any step",
+    ),
+    case(
+        lambda w, b: w.bus.publish("/probe", "hello", latch="no"),
+        InvalidFlag, "latch = 'no' is invalid; give True or False",
+        id="bus.publish latch='no' -> InvalidFlag, nothing latched or delivered",
+    ),
+    # -- stamps: the number rule ------------------------------------------------------------
+    case(
+        lambda w, b: b.status("1"),
+        InvalidNumber, "bob: stamp = '1' is invalid", "a time >= 0 s",
+        id="status stamp '1' -> InvalidNumber, not a status stamped with text",
+    ),
+    case(
+        lambda w, b: b.status(None),
+        InvalidNumber, "bob: stamp = None is invalid",
+        id="status stamp None -> InvalidNumber",
+    ),
+    case(
+        lambda w, b: b.status(math.nan),
+        InvalidNumber, "bob: stamp = nan is invalid",
+        id="status stamp nan -> InvalidNumber",
+    ),
+    case(
+        lambda w, b: b.gripper.state("0"),
+        InvalidNumber, "bob: gripper stamp = '0' is invalid", "a time >= 0 s",
+        id="gripper.state stamp '0' -> InvalidNumber",
     ),
     # -- gripper --------------------------------------------------------------------------
     case(
@@ -357,6 +405,74 @@ def test_bad_world_settings_are_refused_before_any_world_exists(
     assert valid[next(key for key in valid if key in arguments)] in message
 
 
+def launch_bob(viewer: object) -> object:
+    return armfleet.launch("bob_and_toby", viewer=viewer)  # type: ignore[arg-type]
+
+
+def start_viewer(**flags: object) -> object:
+    from armfleet.viewer import Viewer
+
+    return Viewer(**flags)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("start", "expected"),
+    [
+        pytest.param(
+            lambda: armfleet.World(viewer="no"),  # type: ignore[arg-type]
+            "viewer = 'no' is invalid",
+            id="World viewer='no' -> InvalidFlag, not a viewer started",
+        ),
+        pytest.param(
+            lambda: armfleet.World(viewer=0),  # type: ignore[arg-type]
+            "viewer = 0 is invalid",
+            id="World viewer=0, a number as a flag -> InvalidFlag",
+        ),
+        pytest.param(
+            lambda: launch_bob("False"), "viewer = 'False' is invalid",
+            id="launch viewer='False' -> InvalidFlag before the scene is rehearsed",
+        ),
+        pytest.param(
+            lambda: start_viewer(show_frames="no"), "show_frames = 'no' is invalid",
+            id="Viewer show_frames='no' -> InvalidFlag before its server starts",
+        ),
+        pytest.param(
+            lambda: start_viewer(show_targets=None), "show_targets = None is invalid",
+            id="Viewer show_targets=None -> InvalidFlag before its server starts",
+        ),
+    ],
+)  # fmt: skip
+def test_bad_flags_are_refused_before_anything_starts(
+    start: Callable[[], object], expected: str
+) -> None:
+    with pytest.raises(InvalidFlag) as caught:
+        start()
+    message = str(caught.value)
+    assert "\n" not in message
+    assert expected in message and message.endswith("give True or False")
+
+
+def test_a_numpy_bool_is_a_flag(scene: Scene) -> None:  # noqa: F811
+    """np.True_ (what a comparison of arrays gives) counts: bob goes in a straight line.
+
+    Checked against the geometry: halfway through the motion the tool is on the segment
+    from start to goal within 1 mm. (A guard: NumPy bools were taken before too.)
+    """
+    world, bob = scene.world, scene.bob
+    start = tool0(world)
+    goal = start.copy()
+    goal[1, 3] += 0.15
+    duration = bob.move_to_pose(goal, linear=np.bool_(True))  # type: ignore[arg-type]
+    world.run(duration / 2)
+    middle = tool0(world)[:3, 3]
+    a, b = start[:3, 3], goal[:3, 3]
+    along = np.clip(np.dot(middle - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0)
+    assert np.linalg.norm(middle - (a + along * (b - a))) < 1e-3  # [m]
+    assert 0.2 < along < 0.8  # really on its way
+    world.run(duration / 2 + 0.5)
+    assert np.abs(tool0(world)[:3, 3] - b).max() < 1e-3  # arrived [m]
+
+
 class ArrayLike:
     """Numbers behind ``__array__`` (as a tensor or a pandas Series has), not a sequence."""
 
@@ -476,6 +592,11 @@ REMOTE_CASES = [
         lambda b: b.gripper.close("10"), InvalidNumber, "bob: gripper force = '10' is invalid",
         id="remote gripper force '10' -> InvalidNumber before sending",
     ),
+    pytest.param(
+        lambda b: b.move_to_pose([0.4, 0.0, 0.4], linear="no"), InvalidFlag,
+        "linear = 'no' is invalid; give True or False",
+        id="remote move_to_pose linear='no' -> InvalidFlag before sending",
+    ),
 ]  # fmt: skip
 
 
@@ -499,6 +620,21 @@ def test_the_live_api_client_refuses_the_same_types(
         assert expected in str(caught.value) and "\n" not in str(caught.value)
         assert bob.mode is ArmMode.HOLDING  # the world answers, bob holds
     assert sent == []
+
+
+def test_the_live_api_client_takes_a_numpy_bool_as_a_flag(served: Served) -> None:  # noqa: F811
+    """linear=np.True_ goes to the world as true: bob's tool moves 5 cm sideways in a
+    straight line, arriving within 1 mm."""
+    served.step_in_background()
+    pose = served.world.submit(lambda: tool0(served.world)).result(timeout=30)
+    goal = pose.copy()
+    goal[1, 3] += 0.05
+    with armfleet.connect(served.server.address) as client:
+        bob = client.arm("bob")
+        assert bob.move_to_pose(goal, linear=np.bool_(True)) > 0.0  # type: ignore[arg-type]
+        bob.wait()
+    reached = served.world.submit(lambda: tool0(served.world)).result(timeout=30)
+    assert np.abs(reached[:3, 3] - goal[:3, 3]).max() < 1e-3  # [m]
 
 
 def test_the_live_api_client_still_takes_a_pin_se3(served: Served) -> None:  # noqa: F811

@@ -4,8 +4,11 @@ An :class:`armfleet.Arm`, its :class:`armfleet.Gripper`, the world's ``tf`` and 
 :class:`armfleet.WorldObject` stand for something in one world. Once the world is
 closed, everything that reads or commands them raises :class:`WorldClosed`; once
 the arm is removed, its handle and its gripper raise :class:`UnknownArm`, even when
-a new arm of the same name has come up (which must not move). What a handle *is*
-(name, model, joint names and limits) stays readable.
+a new arm of the same name has come up (which must not move); a removed object's
+handle raises :class:`UnknownObject` likewise. That includes an arm's parts that live
+in the world (``body``, ``kinematics``, controllers, ``ik``). What a handle *is*
+(name, model, joint names and limits, description; an object's shape and size)
+stays readable.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import numpy as np
 import pytest
 
 import armfleet
-from armfleet.errors import ArmfleetError, UnknownArm, WorldClosed
+from armfleet.errors import ArmfleetError, UnknownArm, UnknownObject, WorldClosed
 from armfleet.messages import GripperCommand, JointCommand
 from armfleet.remote import RemoteError
 from armfleet.tf_tree import TfTree
@@ -63,6 +66,15 @@ ARM_USES: list[Any] = [
     pytest.param(lambda a, w, g: g.holding, id="gripper.holding"),
     pytest.param(lambda a, w, g: g.is_moving, id="gripper.is_moving"),
     pytest.param(lambda a, w, g: g.state(), id="gripper.state"),
+    # Its parts that live in the world: stale once it is gone (issue #14, item 9).
+    pytest.param(lambda a, w, g: a.body, id="body"),
+    pytest.param(lambda a, w, g: a.kinematics, id="kinematics"),
+    pytest.param(lambda a, w, g: a.controller_manager, id="controller_manager"),
+    pytest.param(lambda a, w, g: a.position_controller, id="position_controller"),
+    pytest.param(lambda a, w, g: a.broadcaster, id="broadcaster"),
+    pytest.param(lambda a, w, g: a.state_publisher, id="state_publisher"),
+    pytest.param(lambda a, w, g: a.gripper_controller, id="gripper_controller"),
+    pytest.param(lambda a, w, g: a.ik, id="ik"),
 ]  # fmt: skip
 
 
@@ -71,6 +83,7 @@ def still_readable(arm: armfleet.Arm, gripper: armfleet.Gripper) -> None:
     assert arm.name == "bob" and arm.model == "panda"
     assert len(arm.joint_names) == 7 and arm.joint_limits[0].shape == (7,)
     assert repr(arm).startswith("Arm('bob'") and repr(gripper).startswith("Gripper(")
+    assert arm.description.model == "panda" and arm.description.prefix == "bob_"
     assert gripper.max_width > 0.0
 
 
@@ -117,15 +130,18 @@ def test_after_close_the_world_and_its_tf_raise_world_closed(
         use(closed[0])
 
 
-@pytest.mark.parametrize(
-    "use",
-    [
-        pytest.param(lambda o: o.pose, id="pose"),
-        pytest.param(lambda o: o.position, id="position"),
-        pytest.param(lambda o: o.velocity, id="velocity"),
-        pytest.param(lambda o: o.set_pose((2, 0, 0.5)), id="set_pose"),
-    ],
-)
+#: Every use of an object handle that reads or moves the object.
+OBJECT_USES = [
+    pytest.param(lambda o: o.pose, id="pose"),
+    pytest.param(lambda o: o.position, id="position"),
+    pytest.param(lambda o: o.velocity, id="velocity"),
+    pytest.param(lambda o: o.angular_velocity, id="angular_velocity"),
+    pytest.param(lambda o: o.set_pose((2, 0, 0.5)), id="set_pose"),
+    pytest.param(lambda o: o.body_id, id="body_id (PyBullet may give it to a new body)"),
+]
+
+
+@pytest.mark.parametrize("use", OBJECT_USES)
 def test_after_close_an_object_raises_world_closed_not_a_pybullet_error(
     use: Callable[[armfleet.WorldObject], object],
 ) -> None:
@@ -136,6 +152,37 @@ def test_after_close_an_object_raises_world_closed_not_a_pybullet_error(
     with pytest.raises(WorldClosed):
         use(box)
     assert box.name == "box" and box.size == (0.05, 0.05, 0.05)
+
+
+@pytest.mark.parametrize("use", OBJECT_USES)
+def test_after_remove_object_its_handle_raises_unknown_object(
+    use: Callable[[armfleet.WorldObject], object],
+) -> None:
+    """As an arm's handle: UnknownObject listing the objects there are (not an ObjectError
+    of its own), and WorldClosed first once the world is closed too."""
+    with armfleet.World() as world:
+        box = world.add_object("box", "box", size=(0.05, 0.05, 0.05), at=(2, 0, 0.025))
+        world.add_object("table", "box", size=(0.4, 0.4, 0.2), at=(3, 0, 0.1), mass=0)
+        _ = box.pose  # measured once: a cached pose must not outlive the object
+        world.remove_object("box")
+        with pytest.raises(UnknownObject, match=r"^no object named 'box'; objects: table$"):
+            use(box)
+        assert box.name == "box" and box.size == (0.05, 0.05, 0.05) and box.removed
+    with pytest.raises(WorldClosed):
+        use(box)
+
+
+def test_a_stale_object_handle_cannot_move_the_new_object_of_the_same_name() -> None:
+    """box is removed and a new box added where the old one was: the old handle raises,
+    the new box stays where it rests (within 1 mm: it settles on the floor)."""
+    with armfleet.World() as world:
+        old = world.add_object("box", "box", size=(0.05, 0.05, 0.05), at=(2, 0, 0.025))
+        world.remove_object("box")
+        new = world.add_object("box", "box", size=(0.05, 0.05, 0.05), at=(2, 0, 0.025))
+        with pytest.raises(UnknownObject, match="no object named 'box'; objects: box"):
+            old.set_pose((2, 0, 0.5))
+        world.run(0.1)
+        assert np.abs(new.position - (2, 0, 0.025)).max() < 1e-3  # [m]
 
 
 @pytest.fixture
@@ -234,19 +281,27 @@ def test_the_live_api_clients_handles_say_the_same(served: Served) -> None:  # n
 #: What a handle *is*: readable after close. Everything else public must raise.
 IDENTITY = {
     armfleet.Arm: {"name", "namespace", "model", "pose", "joint_names", "joint_limits",
-                   "has_gripper", "lifetime"},
+                   "has_gripper", "description", "lifetime"},
     armfleet.Gripper: {"max_width", "max_force", "lifetime"},
     TfTree: {"lifetime"},
+    armfleet.WorldObject: {"name", "shape", "size", "mass", "is_static", "friction", "color",
+                           "mesh", "spec", "removed", "lifetime"},
 }  # fmt: skip
 
 
 def test_no_public_member_of_a_handle_escapes_the_check(
     closed: tuple[armfleet.World, armfleet.Arm, armfleet.Gripper],
 ) -> None:
-    """A guard for members added later: every public method and property of Arm, Gripper
-    and TfTree, called on a closed world's handle, raises WorldClosed, but for IDENTITY."""
+    """A guard for members added later: every public method and property of Arm, Gripper,
+    TfTree and WorldObject, called on a closed world's handle, raises WorldClosed, but for
+    IDENTITY; and no handle has a public plain attribute, which no check could guard."""
     world, bob, gripper = closed
-    handles = {armfleet.Arm: bob, armfleet.Gripper: gripper, TfTree: world.tf}
+    with armfleet.World() as other:
+        box = other.add_object("box", "box", size=(0.05, 0.05, 0.05), at=(2, 0, 0.025))
+    handles = {armfleet.Arm: bob, armfleet.Gripper: gripper, TfTree: world.tf,
+               armfleet.WorldObject: box}  # fmt: skip
+    for handle in handles.values():
+        assert [name for name in vars(handle) if not name.startswith("_")] == []
     checked = []
     for cls, handle in handles.items():
         for name in dir(cls):
@@ -260,7 +315,8 @@ def test_no_public_member_of_a_handle_escapes_the_check(
                 if isinstance(member, FunctionType):
                     value()  # the check comes before any argument is looked at
             checked.append(f"{cls.__name__}.{name}")
-    assert {"Arm.move_to", "Gripper.close", "TfTree.lookup"} <= set(checked)
+    assert {"Arm.move_to", "Arm.body", "Gripper.close", "TfTree.lookup",
+            "WorldObject.set_pose", "WorldObject.body_id"} <= set(checked)  # fmt: skip
     for cls, handle in handles.items():
         for name in IDENTITY[cls]:
             getattr(handle, name)

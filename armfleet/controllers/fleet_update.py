@@ -86,6 +86,8 @@ class FleetUpdate:
     def __init__(self, memory: JointMemory) -> None:
         self._memory = memory
         self._arms: list[Arm] = []
+        #: The arms' controller managers, read once per lay-out (not per step).
+        self._managers: tuple[ControllerManager, ...] = ()
         self._plan: _Plan | None = None
 
     def lay_out(self, arms: Iterable[Arm]) -> None:
@@ -99,6 +101,7 @@ class FleetUpdate:
             )
             arm.position_controller.bind(view)
         memory.attach([arm.body for arm in self._arms], views)
+        self._managers = tuple(arm.controller_manager for arm in self._arms)
         self._plan = None
 
     def update(self, stamp: float, step_index: int) -> None:
@@ -110,7 +113,7 @@ class FleetUpdate:
             manager.update(stamp, step_index)
 
     def _current_plan(self) -> _Plan:
-        key = tuple(arm.controller_manager.version for arm in self._arms)
+        key = tuple(manager.version for manager in self._managers)
         if self._plan is None or self._plan.key != key:
             self._plan = self._make_plan(key)
         return self._plan

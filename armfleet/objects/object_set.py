@@ -23,7 +23,8 @@ class ObjectSet:
         client: PyBullet client id of the world.
         bus: the world's bus (``/tf``, ``/tf_static``).
         contacts: the world's contact monitor, told of every body.
-        lifetime: the world's, given to every object.
+        lifetime: the world's; every object gets a child of it, ended when the
+            object is removed (its handles then raise :class:`UnknownObject`).
     """
 
     def __init__(
@@ -61,8 +62,10 @@ class ObjectSet:
             ObjectCollision: it would touch an arm or overlap the floor or an object
                 (:mod:`armfleet.object_clearance`); nothing was added.
         """
+        name = spec.name
+        lifetime = Lifetime(lambda: UnknownObject(name, list(self._objects)), self._lifetime)
         obj = place_clear_object(
-            self._client, spec, self._contacts.neighbours(), self._teleported, self._lifetime
+            self._client, spec, self._contacts.neighbours(), self._teleported, lifetime
         )
         self._objects[obj.name] = obj
         self._contacts.add_object(obj.name, obj.body_id, static=obj.is_static)

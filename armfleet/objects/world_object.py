@@ -15,8 +15,8 @@ import numpy as np
 import pinocchio as pin
 import pybullet as p
 
-from armfleet.errors import ObjectError, WorldClosed
-from armfleet.lifetime import Lifetime
+from armfleet.errors import ObjectError, UnknownObject
+from armfleet.lifetime import Lifetime, while_alive
 from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import ObjectSpec, Shape, pose_matrix
@@ -30,8 +30,12 @@ class WorldObject:
         spec: what it is (checked).
         client: PyBullet client id of the world.
         on_teleport: called with the object after :meth:`set_pose`.
-        lifetime: its world's: once the world is closed, reading or moving the
-            object raises :class:`~armfleet.errors.WorldClosed`.
+        lifetime: its own, a child of its world's (see :mod:`armfleet.lifetime`),
+            ended by :meth:`remove`: once the world is closed, reading or moving the
+            object raises :class:`~armfleet.errors.WorldClosed`, once it is removed
+            :class:`~armfleet.errors.UnknownObject` (listing the objects there are).
+            What it *is* (name, shape, size, mass, friction, colour, mesh, spec)
+            stays readable.
     """
 
     def __init__(
@@ -42,7 +46,7 @@ class WorldObject:
         lifetime: Lifetime | None = None,
     ) -> None:
         self._spec = spec
-        self._lifetime = lifetime or Lifetime(WorldClosed)
+        self._lifetime = lifetime or Lifetime(lambda: UnknownObject(spec.name, []))
         self._client = client
         self._on_teleport = on_teleport
         try:
@@ -118,19 +122,26 @@ class WorldObject:
         return self._spec
 
     @property
-    def body_id(self) -> int:
-        """PyBullet body id (for inspection; move it with :meth:`set_pose`)."""
-        return self._body_id
+    def lifetime(self) -> Lifetime:
+        """Ended once the object is removed or its world closed."""
+        return self._lifetime
 
     @property
     def removed(self) -> bool:
         return self._removed
 
+    @property
+    @while_alive
+    def body_id(self) -> int:
+        """PyBullet body id (for inspection; move it with :meth:`set_pose`); a removed
+        object's id may be a new body's, so it raises like the rest."""
+        return self._body_id
+
     # -- where it is --------------------------------------------------------------------
     @property
+    @while_alive
     def pose(self) -> FloatArray:
         """4x4 pose of the object's frame in ``world``, as measured after the last step [m]."""
-        self._check_present()
         if self._pose is None:
             position, orientation = p.getBasePositionAndOrientation(
                 self._body_id, physicsClientId=self._client
@@ -142,31 +153,32 @@ class WorldObject:
         return self._pose.copy()
 
     @property
+    @while_alive
     def position(self) -> FloatArray:
         """(x, y, z) of the object's frame in ``world`` [m]."""
         return self.pose[:3, 3]
 
     @property
+    @while_alive
     def velocity(self) -> FloatArray:
         """Linear velocity of the object's frame in ``world`` [m/s]."""
-        self._check_present()
         linear, _ = p.getBaseVelocity(self._body_id, physicsClientId=self._client)
         return np.array(linear, dtype=float)
 
     @property
+    @while_alive
     def angular_velocity(self) -> FloatArray:
         """Angular velocity in ``world`` [rad/s]."""
-        self._check_present()
         _, angular = p.getBaseVelocity(self._body_id, physicsClientId=self._client)
         return np.array(angular, dtype=float)
 
+    @while_alive
     def set_pose(self, at: Sequence[float], rpy_deg: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
         """Teleport the object to ``at`` [m], ``rpy_deg`` [deg], at rest (for tests, scenarios).
 
         Call it between steps (from the stepping thread, or through
         :meth:`armfleet.World.submit`).
         """
-        self._check_present()
         if not (is_real_vector(at) and is_real_vector(rpy_deg)) or not (
             len(at) == len(rpy_deg) == 3 and all(math.isfinite(v) for v in [*at, *rpy_deg])
         ):
@@ -183,21 +195,23 @@ class WorldObject:
         if self._on_teleport is not None:
             self._on_teleport(self)
 
+    @while_alive
     def stale(self) -> None:
         """Forget the measured pose: the world has stepped."""
         self._pose = None
 
+    @while_alive
     def remove(self) -> None:
-        """Take the body out of the physics engine; idempotent."""
-        if not self._removed:
-            self._removed = True
-            # Its collision shape stays: PyBullet refuses to remove a shape a body used.
-            p.removeBody(self._body_id, physicsClientId=self._client)
+        """Take the body out of the physics engine (the world does: use
+        :meth:`armfleet.World.remove_object`, which also takes its frame and contacts).
 
-    def _check_present(self) -> None:
-        self._lifetime.check()
-        if self._removed:
-            raise ObjectError(self.name, "name", "this object was removed from its world")
+        Raises:
+            UnknownObject: removed already; WorldClosed: its world is closed.
+        """
+        self._lifetime.end()  # its handles raise UnknownObject from now on
+        self._removed = True
+        # Its collision shape stays: PyBullet refuses to remove a shape a body used.
+        p.removeBody(self._body_id, physicsClientId=self._client)
 
     def __repr__(self) -> str:
         kind = "static" if self.is_static else f"{self.mass:g} kg"

@@ -9,6 +9,7 @@ import pinocchio as pin
 
 from armfleet import number_ranges
 from armfleet.errors import ArmfleetError, NoGripper
+from armfleet.flags import flag
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
 from armfleet.real_numbers import all_real
 from armfleet.remote.codec import decode_message
@@ -133,6 +134,7 @@ class RemoteArm:
             RemoteError: the world refused it (``UnreachablePose``, ``ArmInMotion``,
                 ``UnknownFrame``...); nothing moved and the current motion goes on.
         """
+        linear = flag(linear, "linear")
         if isinstance(pose, pin.SE3):
             pose = pose.homogeneous  # the world checks it is a rigid transform
         values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")

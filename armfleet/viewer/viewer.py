@@ -24,6 +24,7 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from armfleet.flags import flag
 from armfleet.viewer.errors import ViewerError
 
 if TYPE_CHECKING:
@@ -98,6 +99,8 @@ class Viewer:
         show_targets: bool = True,
         display_rate_hz: float = DISPLAY_RATE_HZ,
     ) -> None:
+        show_frames = flag(show_frames, "show_frames")
+        show_targets = flag(show_targets, "show_targets")
         if not (math.isfinite(display_rate_hz) and 0 < display_rate_hz <= 1000):
             raise ViewerError(
                 f"display rate {display_rate_hz} Hz is invalid; choose one in (0, 1000] Hz"
@@ -275,11 +278,13 @@ class Viewer:
 
     def show_frames(self, visible: bool = True) -> None:
         """Show or hide every arm's ``base_link`` and ``tool0`` frames."""
+        visible = flag(visible, "visible")
         self._show_frames = visible
         self._set_group_visible("landmarks", visible)
 
     def show_targets(self, visible: bool = True) -> None:
         """Show or hide the markers at ``tool0`` of the arms' motion targets."""
+        visible = flag(visible, "visible")
         self._show_targets = visible
         self._set_group_visible("targets", visible)
 
