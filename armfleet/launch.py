@@ -9,6 +9,7 @@ from armfleet.arm import Arm
 from armfleet.description import ModelLibrary
 from armfleet.flags import flag
 from armfleet.objects import ObjectSpec, WorldObject
+from armfleet.objects.object_arguments import object_arguments
 from armfleet.spec import FleetSpec, load_spec
 from armfleet.spec.fleet_spec import ArmSpec
 from armfleet.spec.scene_rehearsal import rehearse
@@ -29,20 +30,7 @@ def spawn_from_spec(world: World, arm: ArmSpec) -> Arm:
 
 def add_from_spec(world: World, obj: ObjectSpec) -> WorldObject:
     """Add one object of a spec to ``world``."""
-    return world.add_object(
-        obj.name,
-        obj.shape.value,
-        size=None if obj.mesh is not None else obj.size,
-        mass=obj.mass_kg,
-        friction=obj.friction,
-        spinning_friction=obj.spinning_friction_m,
-        rolling_friction=obj.rolling_friction_m,
-        color=obj.color,
-        at=obj.at,
-        rpy_deg=obj.rpy_deg,
-        mesh=obj.mesh,
-        scale=obj.scale,
-    )
+    return world.add_object(obj.name, obj.shape.value, **object_arguments(obj))
 
 
 def launch(

@@ -22,10 +22,10 @@ import pytest
 
 import armfleet
 from armfleet.arm_assembly import start_positions
-from armfleet.errors import ArmfleetError, ObjectCollision, StartPoseCollision
+from armfleet.errors import ArmfleetError, ObjectCollision, ObjectError, StartPoseCollision
 from armfleet.kinematics import ArmKinematics
 from armfleet.object_clearance import RESTING_OVERLAP_M
-from armfleet.objects import ObjectSpec, object_spec
+from armfleet.objects import ObjectSpec, Shape, object_spec
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec, SpecError, parse_spec
 from armfleet.start_clearance import CLEARANCE_M
@@ -393,6 +393,14 @@ def box_spec(name: str, mass: float, at: Sequence[float]) -> ObjectSpec:
             ),
             ObjectCollision, "object 'cup': at: it would overlap crate there",
             id="a 0.5 kg box half into a static one -> ObjectCollision, no world",
+        ),
+        pytest.param(
+            FleetSpec(
+                arms=(ArmSpec("bob"),),
+                objects=(ObjectSpec("box", Shape.BOX, (-0.1, 0.1, 0.1), at=(2.0, 0.0, 0.5)),),
+            ),
+            ObjectError, "object 'box': size: [-0.1, 0.1, 0.1]: each must be in (0, 100] m",
+            id="an ObjectSpec built by hand with a negative size -> ObjectError, no world",
         ),
         pytest.param(
             FleetSpec(arms=(ArmSpec("bob"), ArmSpec("bob", pose=SpawnPose(3.0, 0.0)))),

@@ -55,7 +55,8 @@ from armfleet.located_yaml import LocatedDict
 from armfleet.messages import FloatArray
 from armfleet.names import check_arm_name
 from armfleet.object_clearance import place_clear_object
-from armfleet.objects.object_spec import ObjectSpec
+from armfleet.objects.object_arguments import object_arguments
+from armfleet.objects.object_spec import ObjectSpec, object_spec
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec.fleet_spec import ArmSpec, FleetSpec
 from armfleet.spec.spec_reader import SpecReader
@@ -112,10 +113,12 @@ class SceneRehearsal:
         objects placed before it.
 
         Raises:
+            ObjectError: a bad field (an ``ObjectSpec`` built by hand is checked again).
             NameInUse: an arm or an object has its name.
             FrameInUse: an arm owns a frame named like it.
             ObjectCollision: it would overlap the floor or an object.
         """
+        obj = object_spec(obj.name, obj.shape, **object_arguments(obj))  # as add_object does
         if obj.name in self._arms or obj.name in self._objects:
             kind = "an arm" if obj.name in self._arms else "an object"
             raise NameInUse(obj.name, kind, list(self._arms), self._objects)
