@@ -35,6 +35,7 @@ import pinocchio as pin
 from armfleet.errors import TargetPoseError, UnknownFrame
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
+from armfleet.number_ranges import WORLD_COORDINATE_M
 from armfleet.real_numbers import all_real
 
 #: Orthonormality and last-row tolerance of a 4x4 pose given by a user.
@@ -62,6 +63,11 @@ def as_se3(pose: Any) -> pin.SE3:
         raise TargetPoseError(f"a pose must be a 4x4 homogeneous matrix, got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
         raise TargetPoseError("a pose must be finite (it has NaN or inf)")
+    if not all(WORLD_COORDINATE_M.contains(float(v)) for v in matrix[:3, 3]):
+        raise TargetPoseError(
+            f"a pose's position {matrix[:3, 3].tolist()} is out of range; give "
+            f"{WORLD_COORDINATE_M.valid} each"
+        )
     rotation = matrix[:3, :3]
     if (
         np.abs(rotation.T @ rotation - np.eye(3)).max() > POSE_TOLERANCE

@@ -1,5 +1,5 @@
 """The ranges of the numbers users give commands and services: timeouts, run durations,
-step counts, ports, replay speeds.
+step counts, ports, replay speeds, world coordinates and pose angles.
 
 One place for each range, so that the command line (its argument checks), the live
 API (the server's request checks) and the Python client refuse the same values, in
@@ -98,5 +98,11 @@ STEP_COUNT = NumberRange(1, 100_000, "steps", integer=True)
 PORT = NumberRange(1, 65535, "a TCP port", integer=True)
 #: A TCP port, or 0 for a free one.
 PORT_OR_FREE = NumberRange(0, 65535, "a TCP port (0: a free one)", integer=True)
+#: A coordinate of a position in the world (an arm's base, an object, a pose goal) [m]:
+#: room for any cell. Far beyond it the whole world slows down: one arm spawned at
+#: x = 1e308 m cut a shared world's real-time factor from 1.00 to about 0.2.
+WORLD_COORDINATE_M = NumberRange(-1000.0, 1000.0, "metres")
+#: An angle of a pose given in degrees (roll, pitch, yaw) [deg].
+ANGLE_DEG = NumberRange(-360.0, 360.0, "degrees")
 #: Replay speed, times real time.
 REPLAY_SPEED = NumberRange(0.001, 1000.0, "a factor (times real time)")

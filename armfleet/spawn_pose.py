@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from armfleet.errors import PoseError
+from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.real_numbers import is_real, is_real_vector
 
 AT_SYNTAX = "X,Y[,Z[,YAW_DEG]]"
@@ -43,6 +44,9 @@ class SpawnPose:
                 raise PoseError(f"spawn pose {field} is {value!r}; it must be a finite number")
             if not math.isfinite(value):
                 raise PoseError(f"spawn pose {field} is {value}; it must be a finite number")
+            valid = WORLD_COORDINATE_M if field in ("x", "y", "z") else ANGLE_DEG
+            if not valid.contains(value):
+                raise PoseError(f"spawn pose {field} is {value:g}; give {valid.valid}")
 
     @classmethod
     def from_values(cls, values: Sequence[float] | SpawnPose) -> SpawnPose:

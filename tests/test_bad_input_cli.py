@@ -133,6 +133,49 @@ BAD = [
         ["argument --speed: 'inf' is invalid", "in [0.001, 1000]"],
         id="replay --speed inf -> refused before the file is read",
     ),
+    # -- positions and angles: a world coordinate is within 1000 m, an angle within 360 deg --
+    pytest.param(
+        ["spawn", "carl", "--at", "1e308,1.5"],
+        ["spawn pose x is 1e+308; give metres in [-1000, 1000]"],
+        id="spawn --at 1e308 -> refused (such an arm slowed the shared world 5x)",
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,1.5,0,720"],
+        ["spawn pose yaw is 720; give degrees in [-360, 360]"],
+        id="spawn yaw 720 -> refused",
+    ),
+    pytest.param(
+        ["add-object", "cup", "sphere", "--size", "0.03", "--at", "1e308", "0", "0"],
+        ["object 'cup': at: [1e+308, 0.0, 0.0] is out of range", "metres in [-1000, 1000]"],
+        id="add-object --at 1e308 -> refused by the world, nothing added",
+    ),
+    pytest.param(
+        [
+            "add-object",
+            "cup",
+            "sphere",
+            "--size",
+            "0.03",
+            "--at",
+            "0.5",
+            "0.5",
+            "0.03",
+            "--yaw",
+            "-1e308",
+        ],
+        ["object 'cup': rpy_deg: [0.0, 0.0, -1e+308] is out of range", "[-360, 360]"],
+        id="add-object --yaw -1e308 -> refused by the world, nothing added",
+    ),
+    pytest.param(
+        ["move", "bob", "--pose", "1e308", "0", "0.4"],
+        ["a pose's position [1e+308, 0.0, 0.4] is out of range", "metres in [-1000, 1000]"],
+        id="move --pose x 1e308 -> refused by the world, nothing moved",
+    ),
+    pytest.param(
+        ["move", "bob", "--pose", "0.4", "0", "0.4", "1e308", "0", "0"],
+        ["--pose roll = 1e+308 is invalid; give degrees in [-360, 360]"],
+        id="move --pose roll 1e308 -> refused before sending",
+    ),
     # -- names and lists --------------------------------------------------------------------
     pytest.param(
         ["spwan", "carl", "--at", "0,1.5"],

@@ -11,6 +11,7 @@ from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.messages import FloatArray
+from armfleet.number_ranges import ANGLE_DEG
 from armfleet.objects.object_spec import pose_matrix
 from armfleet.remote import Client
 from armfleet.remote.remote_arm import WAIT_TIMEOUT_S, RemoteArm
@@ -81,6 +82,8 @@ def move_pose(args: argparse.Namespace) -> int:
     values: list[float] = args.pose
     if len(values) not in (3, 6):
         raise UsageError(f"--pose takes {POSE_SYNTAX} (3 or 6 numbers: m, deg); got {len(values)}")
+    for axis, angle in zip(("roll", "pitch", "yaw"), values[3:], strict=False):
+        ANGLE_DEG.check(angle, f"--pose {axis}")  # the world checks the position
     goal = pose_matrix(values[:3], values[3:]) if len(values) == 6 else np.array(values)
     with connect_from(args) as client:
         arm = client.arm(args.name)

@@ -20,6 +20,7 @@ import numpy as np
 from armfleet.errors import ObjectError
 from armfleet.messages import FloatArray
 from armfleet.names import RESERVED_NAMES, name_problem
+from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.objects.mesh_file import MESH_SUFFIXES, mesh_extents
 from armfleet.real_numbers import is_real, is_real_vector
 
@@ -185,6 +186,9 @@ def object_spec(
         raise fail("color", f"{list(rgba)} has a value outside [0, 1]; give RGBA in [0, 1]")
     position = _numbers(name, "at", at, 3, "(x, y, z) [m]")
     rpy = _numbers(name, "rpy_deg", rpy_deg, 3, "(roll, pitch, yaw) [deg]")
+    for field, values, valid in (("at", position, WORLD_COORDINATE_M), ("rpy_deg", rpy, ANGLE_DEG)):
+        if not all(valid.contains(v) for v in values):
+            raise fail(field, f"{list(values)} is out of range; give {valid.valid} each")
     scale = _number(name, "scale", scale, 1e-6, 1e6, "")
     path: Path | None = None
     if kind is Shape.MESH:
