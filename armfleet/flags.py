@@ -4,7 +4,8 @@ Python reads anything as a condition: ``move_to_pose(goal, linear="no")`` would
 move in a straight line, ``World(viewer="False")`` would start a viewer, and
 ``1`` or ``None`` pass unnoticed. Every public keyword that is a flag (``linear``,
 ``realtime``, ``viewer``, ``latch``, the viewer's ``show_frames`` and
-``show_targets``, the live-API client's ``linear``) goes through :func:`flag`, so
+``show_targets``, the live-API client's ``linear``, ``serve``'s ``register``) goes
+through :func:`flag`, so
 all refuse the same things: text, numbers, None and anything else not a bool.
 A NumPy bool is a bool.
 """

@@ -41,7 +41,7 @@ from armfleet.errors import (
 )
 from armfleet.messages import ArmMode, FloatArray, GripperCommand
 from armfleet.recording import RecordingError
-from armfleet.remote import RemoteError
+from armfleet.remote import RemoteError, serve
 from armfleet.remote.remote_arm import RemoteArm
 from armfleet.spec import SpecError, parse_spec
 from armfleet.time_step import MAX_DT_S, MIN_DT_S
@@ -450,6 +450,17 @@ def test_bad_flags_are_refused_before_anything_starts(
     message = str(caught.value)
     assert "\n" not in message
     assert expected in message and message.endswith("give True or False")
+
+
+def test_serve_register_no_is_refused_and_names_no_world(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """serve(world, register='no') would write the runtime file every client joins."""
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    refused = r"^register = 'no' is invalid; give True or False$"
+    with armfleet.World() as world, pytest.raises(InvalidFlag, match=refused):
+        serve(world, register="no")  # type: ignore[arg-type]
+    assert not list(tmp_path.rglob("*.json"))  # no world named for clients to join
 
 
 def test_a_numpy_bool_is_a_flag(scene: Scene) -> None:  # noqa: F811

@@ -26,6 +26,7 @@ from typing import Any
 import zmq
 
 from armfleet.errors import ArmfleetError
+from armfleet.flags import flag
 from armfleet.number_ranges import REQUEST_TIMEOUT_S, WAIT_TIMEOUT_S
 from armfleet.remote import runtime_file
 from armfleet.remote.address import DEFAULT_BIND, bind_endpoint, check_bind_host, is_loopback
@@ -93,6 +94,7 @@ class WorldServer:
         register: bool = True,
     ) -> None:
         host = check_bind_host(host)
+        register = flag(register, "register")  # 'no' would name this world to every client
         self._world = world
         self._context = zmq.Context()
         self._socket = self._context.socket(zmq.ROUTER)
