@@ -193,6 +193,29 @@ def test_landmark_frames_can_be_shown(viewed: armfleet.World) -> None:
     assert scene.properties[("/meshcat/armfleet/bob/landmarks", "visible")] is False
 
 
+@pytest.mark.parametrize(
+    ("show", "expected"),
+    [
+        pytest.param(lambda v: v.show_frames("no"), "visible = 'no' is invalid",
+                     id="show_frames('no') -> InvalidFlag, frames stay hidden"),
+        pytest.param(lambda v: v.show_targets(0), "visible = 0 is invalid",
+                     id="show_targets(0) -> InvalidFlag, markers stay shown"),
+    ],
+)  # fmt: skip
+def test_show_takes_a_bool_only(viewed: armfleet.World, show: Any, expected: str) -> None:
+    """'no' would have shown the frames: Python reads any text as yes."""
+    viewer = viewer_of(viewed)
+    with SceneWatcher(viewer.port) as watcher:
+        before = watcher.wait_quiet().properties
+        with pytest.raises(armfleet.InvalidFlag, match=expected):
+            show(viewer)
+        after = watcher.wait_quiet().properties
+    for group in ("landmarks", "targets"):
+        key = (f"/meshcat/armfleet/bob/{group}", "visible")
+        assert after.get(key) == before.get(key)
+    assert after.get(("/meshcat/armfleet/bob/landmarks", "visible")) is False
+
+
 def test_display_updates_follow_wall_time_not_physics(viewed: armfleet.World) -> None:
     viewer = viewer_of(viewed)
     toby = viewed.arm("toby")
