@@ -14,11 +14,17 @@ def _choices(values: Iterable[str]) -> str:
     return ", ".join(listed) if listed else "(none)"
 
 
+#: Longest name or value an error message prints whole (a name may have 64 characters
+#: and a frame adds its link's suffix); anything longer is cut, so a message stays one line.
+_SHOWN_CHARS = 96
+
+
 def shown_name(name: object) -> str:
-    """``repr(name)``, cut short for a name too long to print on one line."""
-    if isinstance(name, str) and len(name) > 40:
-        return f"{name[:24]!r}..."
-    return repr(name)
+    """``repr(name)``, cut short for anything too long to print on one line."""
+    if isinstance(name, str) and len(name) > _SHOWN_CHARS:
+        return f"{name[:_SHOWN_CHARS]!r}..."
+    shown = repr(name)
+    return shown if len(shown) <= _SHOWN_CHARS else f"{shown[:_SHOWN_CHARS]}..."
 
 
 class ArmfleetError(Exception):
@@ -29,7 +35,7 @@ class UnknownModel(ArmfleetError):
     def __init__(self, name: str, available: Sequence[str]) -> None:
         self.name = name
         self.available = tuple(available)
-        super().__init__(f"model {name!r} not found; available: {_choices(available)}")
+        super().__init__(f"model {shown_name(name)} not found; available: {_choices(available)}")
 
 
 class InvalidArmName(ArmfleetError):
@@ -49,20 +55,20 @@ class DuplicateArmName(ArmfleetError):
     def __init__(self, name: str, existing: Sequence[str]) -> None:
         self.name = name
         super().__init__(
-            f"arm name {name!r} is already used in this world; arms: {_choices(existing)}"
+            f"arm name {shown_name(name)} is already used in this world; arms: {_choices(existing)}"
         )
 
 
 class UnknownArm(ArmfleetError):
     def __init__(self, name: str, existing: Sequence[str]) -> None:
         self.name = name
-        super().__init__(f"no arm named {name!r}; arms: {_choices(existing)}")
+        super().__init__(f"no arm named {shown_name(name)}; arms: {_choices(existing)}")
 
 
 class UnknownFrame(ArmfleetError):
     def __init__(self, frame: str, hint: str) -> None:
         self.frame = frame
-        super().__init__(f"frame {frame!r} not found; {hint}")
+        super().__init__(f"frame {shown_name(frame)} not found; {hint}")
 
 
 class TargetLengthError(ArmfleetError):
@@ -136,7 +142,9 @@ class ResourceNotFound(DescriptionError):
     def __init__(self, uri: str, searched: Sequence[str]) -> None:
         self.uri = uri
         self.searched = tuple(searched)
-        super().__init__(f"cannot resolve {uri!r}; searched: {', '.join(searched) or '(nothing)'}")
+        super().__init__(
+            f"cannot resolve {shown_name(uri)}; searched: {', '.join(searched) or '(nothing)'}"
+        )
 
 
 class ParameterError(ArmfleetError):
@@ -203,7 +211,7 @@ class ObjectError(ArmfleetError):
 class UnknownObject(ArmfleetError):
     def __init__(self, name: str, existing: Sequence[str]) -> None:
         self.name = name
-        super().__init__(f"no object named {name!r}; objects: {_choices(existing)}")
+        super().__init__(f"no object named {shown_name(name)}; objects: {_choices(existing)}")
 
 
 class NameInUse(ArmfleetError):
@@ -212,8 +220,8 @@ class NameInUse(ArmfleetError):
     def __init__(self, name: str, kind: str, arms: Sequence[str], objects: Sequence[str]) -> None:
         self.name = name
         super().__init__(
-            f"name {name!r} is already used in this world by {kind}; names are unique across "
-            f"arms ({_choices(arms)}) and objects ({_choices(objects)})"
+            f"name {shown_name(name)} is already used in this world by {kind}; names are unique "
+            f"across arms ({_choices(arms)}) and objects ({_choices(objects)})"
         )
 
 
