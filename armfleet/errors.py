@@ -282,10 +282,18 @@ class ObjectCollision(ObjectError):
         distance_m: signed distance between the two [m]; negative: overlap.
         allowed_m: the smallest distance allowed there [m] (an arm's clearance, or
             minus the overlap a resting object may have).
+        outcome: what was left as it was (``"nothing was added"``, or for a
+            teleport ``"it was not moved"``).
     """
 
     def __init__(
-        self, name: str, other: str, other_link: str, distance_m: float, allowed_m: float
+        self,
+        name: str,
+        other: str,
+        other_link: str,
+        distance_m: float,
+        allowed_m: float,
+        outcome: str = "nothing was added",
     ) -> None:
         self.other, self.other_link = other, other_link
         self.distance_m, self.allowed_m = distance_m, allowed_m
@@ -300,7 +308,7 @@ class ObjectCollision(ObjectError):
         super().__init__(
             name,
             "at",
-            f"it would {verb} {other} there ({where}{gap}; {rule}); nothing was added: "
+            f"it would {verb} {other} there ({where}{gap}; {rule}); {outcome}: "
             "choose a pose clear of it",
         )
 

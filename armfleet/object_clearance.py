@@ -67,7 +67,12 @@ def object_offences(
 
 
 def check_object_clearance(
-    client: int, name: str, body_id: int, static: bool, neighbours: Iterable[Neighbour]
+    client: int,
+    name: str,
+    body_id: int,
+    static: bool,
+    neighbours: Iterable[Neighbour],
+    outcome: str = "nothing was added",
 ) -> None:
     """Raise if the object ``name`` (``body_id``; ``static`` if it has no mass) breaks
     the rule of this module against any of the ``neighbours``.
@@ -79,7 +84,9 @@ def check_object_clearance(
     offences = object_offences(client, body_id, static, neighbours)
     if offences:
         distance, allowed, other, link = offences[0]
-        raise ObjectCollision(name, other.name, other.links.get(link, ""), distance, allowed)
+        raise ObjectCollision(
+            name, other.name, other.links.get(link, ""), distance, allowed, outcome
+        )
 
 
 def place_clear_object(
@@ -88,6 +95,7 @@ def place_clear_object(
     neighbours: Iterable[Neighbour],
     on_teleport: Callable[[WorldObject], None] | None = None,
     lifetime: Lifetime | None = None,
+    on_remove: Callable[[str], None] | None = None,
 ) -> WorldObject:
     """Make the object ``spec`` describes, if it breaks no rule of this module where it is.
 
@@ -95,10 +103,10 @@ def place_clear_object(
         ObjectCollision: it would; its body is removed again.
         ObjectError: PyBullet cannot load its mesh.
     """
-    obj = WorldObject(spec, client, on_teleport, lifetime)
+    obj = WorldObject(spec, client, on_teleport, lifetime, on_remove)
     try:
         check_object_clearance(client, obj.name, obj.body_id, obj.is_static, neighbours)
     except BaseException:
-        obj.remove()
+        obj.discard_body()
         raise
     return obj

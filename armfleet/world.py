@@ -115,7 +115,9 @@ class World:
         self._lifetime = Lifetime(WorldClosed)
         self._tf = TfTree(self._arm_states, lambda: self._objects.objects, self._lifetime)
         self._contacts = ContactMonitor(self._client, self._ground, self._bus, self._on_contact)
-        self._objects = ObjectSet(self._client, self._bus, self._contacts, self._lifetime)
+        self._objects = ObjectSet(
+            self._client, self._bus, self._contacts, self._lifetime, self.remove_object
+        )
         self._frames = FrameRegistry()  # every frame has one owner: arm or object
         self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))

@@ -22,7 +22,13 @@ import pytest
 
 import armfleet
 from armfleet.arm_assembly import start_positions
-from armfleet.errors import ArmfleetError, ObjectCollision, ObjectError, StartPoseCollision
+from armfleet.errors import (
+    ArmfleetError,
+    ObjectCollision,
+    ObjectError,
+    StartPoseCollision,
+    UnknownFrame,
+)
 from armfleet.kinematics import ArmKinematics
 from armfleet.object_clearance import RESTING_OVERLAP_M
 from armfleet.objects import ObjectSpec, Shape, object_spec
@@ -490,3 +496,40 @@ def test_a_clear_fleet_spec_from_python_comes_up_whole() -> None:
         assert_nobody_stopped(world, 0)
     finally:
         world.close()
+
+
+@pytest.mark.parametrize("mass", [0.0, 0.5], ids=["static box", "0.5 kg box"])
+def test_teleporting_an_object_into_an_arm_is_refused_and_it_stays_put(
+    world: armfleet.World, physics: int, mass: float
+) -> None:
+    """set_pose is the same question as add_object: would it touch the arm where it goes?"""
+    world.spawn("bob", at=(0, 0))
+    box = world.add_object("box", "box", size=(0.1, 0.1, 0.1), mass=mass, at=(1.0, 0, 0.05))
+    hand = world.tf.world_pose("bob_tool0")[:3, 3].tolist()
+    # The physics' own answer, in a client of its own: a plain box at the hand touches bob.
+    reference_bob = load_at_start(physics, world, "bob", SpawnPose())
+    reference_box = plain_box(physics, hand, mass, 0.1)
+    assert deepest_contact_m(physics, reference_bob, reference_box) < CLEARANCE_M
+    before = box.pose
+    with pytest.raises(ObjectCollision, match=r"would touch bob there.*it was not moved"):
+        box.set_pose(hand)
+    assert np.array_equal(box.pose, before)
+    assert_nobody_stopped(world, 0)
+    box.set_pose((1.0, 0.5, 0.05))  # clear of everything: taken
+    assert np.allclose(box.pose[:3, 3], (1.0, 0.5, 0.05), atol=1e-3)
+
+
+def test_removing_an_object_through_its_handle_frees_its_name_and_frame(
+    world: armfleet.World,
+) -> None:
+    """obj.remove() is the world's removal: a new object may take the name and its frame."""
+    box = world.add_object("box", "box", size=(0.1, 0.1, 0.1), mass=0.5, at=(1.0, 0, 0.05))
+    body = box.spec
+    box.remove()
+    assert "box" not in world.objects
+    with pytest.raises(UnknownFrame):
+        world.tf.world_pose("box")
+    again = world.add_object("box", "box", size=(0.1, 0.1, 0.1), mass=0.5, at=(1.0, 0, 0.05))
+    assert again.spec == body
+    world.run(0.2)  # the contact monitor knows only the new body
+    assert world.safety.stops == 0

@@ -6,11 +6,13 @@ against its arms before calling :meth:`ObjectSet.add`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from armfleet.bus import Bus
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.errors import UnknownObject
 from armfleet.lifetime import Lifetime
-from armfleet.object_clearance import place_clear_object
+from armfleet.object_clearance import check_object_clearance, place_clear_object
 from armfleet.objects.object_frames import ObjectFramePublisher
 from armfleet.objects.object_spec import ObjectSpec
 from armfleet.objects.world_object import WorldObject
@@ -25,12 +27,21 @@ class ObjectSet:
         contacts: the world's contact monitor, told of every body.
         lifetime: the world's; every object gets a child of it, ended when the
             object is removed (its handles then raise :class:`UnknownObject`).
+        on_remove: the world's removal of an object by name, which
+            :meth:`WorldObject.remove` calls, so that removing through the handle
+            takes out everything the world keeps of it.
     """
 
     def __init__(
-        self, client: int, bus: Bus, contacts: ContactMonitor, lifetime: Lifetime | None = None
+        self,
+        client: int,
+        bus: Bus,
+        contacts: ContactMonitor,
+        lifetime: Lifetime | None = None,
+        on_remove: Callable[[str], None] | None = None,
     ) -> None:
         self._client = client
+        self._on_remove = on_remove
         self._lifetime = lifetime
         self._contacts = contacts
         self._frames = ObjectFramePublisher(bus)
@@ -65,7 +76,12 @@ class ObjectSet:
         name = spec.name
         lifetime = Lifetime(lambda: UnknownObject(name, list(self._objects)), self._lifetime)
         obj = place_clear_object(
-            self._client, spec, self._contacts.neighbours(), self._teleported, lifetime
+            self._client,
+            spec,
+            self._contacts.neighbours(),
+            self._teleported,
+            lifetime,
+            self._on_remove,
         )
         self._objects[obj.name] = obj
         self._contacts.add_object(obj.name, obj.body_id, static=obj.is_static)
@@ -79,7 +95,7 @@ class ObjectSet:
         obj = self.get(name)
         self._frames.withdraw(name)
         self._contacts.remove_object(obj.body_id)
-        obj.remove()
+        obj.discard_body()
         del self._objects[name]
         self._update_moving()
         return obj
@@ -98,6 +114,10 @@ class ObjectSet:
             self.remove(name)
 
     def _teleported(self, obj: WorldObject) -> None:
+        others = (n for n in self._contacts.neighbours() if n.body_id != obj.body_id)
+        check_object_clearance(
+            self._client, obj.name, obj.body_id, obj.is_static, others, "it was not moved"
+        )
         if obj.is_static:
             self._frames.latch(obj, self._stamp)
 

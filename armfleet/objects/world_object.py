@@ -29,7 +29,11 @@ class WorldObject:
     Args:
         spec: what it is (checked).
         client: PyBullet client id of the world.
-        on_teleport: called with the object after :meth:`set_pose`.
+        on_teleport: called with the object after :meth:`set_pose` moved it; if it
+            raises (the new pose is refused), the object goes back where it was.
+        on_remove: called with the object's name by :meth:`remove`: the world's own
+            removal (body, frame, contacts, viewer). Without it, :meth:`remove` takes
+            the body out of the physics engine only.
         lifetime: its own, a child of its world's (see :mod:`armfleet.lifetime`),
             ended by :meth:`remove`: once the world is closed, reading or moving the
             object raises :class:`~armfleet.errors.WorldClosed`, once it is removed
@@ -44,8 +48,10 @@ class WorldObject:
         client: int,
         on_teleport: Callable[[WorldObject], None] | None = None,
         lifetime: Lifetime | None = None,
+        on_remove: Callable[[str], None] | None = None,
     ) -> None:
         self._spec = spec
+        self._on_remove = on_remove
         self._lifetime = lifetime or Lifetime(lambda: UnknownObject(spec.name, []))
         self._client = client
         self._on_teleport = on_teleport
@@ -178,6 +184,12 @@ class WorldObject:
 
         Call it between steps (from the stepping thread, or through
         :meth:`armfleet.World.submit`).
+
+        Raises:
+            ObjectError: not a finite pose.
+            ObjectCollision: in a world, it would touch an arm or overlap something
+                there (the rule of :mod:`armfleet.object_clearance`, as for a new
+                object); it stays where it was, moving as it was.
         """
         if not (is_real_vector(at) and is_real_vector(rpy_deg)) or not (
             len(at) == len(rpy_deg) == 3 and all(math.isfinite(v) for v in [*at, *rpy_deg])
@@ -185,15 +197,29 @@ class WorldObject:
             raise ObjectError(
                 self.name, "set_pose", "give at=(x, y, z) [m] and rpy_deg=(r, p, y), finite"
             )
-        matrix = pose_matrix(at, rpy_deg)
-        position, orientation = _position_quaternion(matrix)
+        position, orientation = p.getBasePositionAndOrientation(
+            self._body_id, physicsClientId=self._client
+        )
+        velocity = p.getBaseVelocity(self._body_id, physicsClientId=self._client)
+        self._place(*_position_quaternion(pose_matrix(at, rpy_deg)), ([0, 0, 0], [0, 0, 0]))
+        if self._on_teleport is not None:
+            try:
+                self._on_teleport(self)
+            except BaseException:  # refused where it would go: back where it was
+                self._place(position, orientation, velocity)
+                raise
+
+    def _place(
+        self,
+        position: Sequence[float],
+        orientation: Sequence[float],
+        velocity: tuple[Sequence[float], Sequence[float]],
+    ) -> None:
         p.resetBasePositionAndOrientation(
             self._body_id, position, orientation, physicsClientId=self._client
         )
-        p.resetBaseVelocity(self._body_id, [0, 0, 0], [0, 0, 0], physicsClientId=self._client)
+        p.resetBaseVelocity(self._body_id, *velocity, physicsClientId=self._client)
         self._pose = None
-        if self._on_teleport is not None:
-            self._on_teleport(self)
 
     @while_alive
     def stale(self) -> None:
@@ -202,8 +228,21 @@ class WorldObject:
 
     @while_alive
     def remove(self) -> None:
-        """Take the body out of the physics engine (the world does: use
-        :meth:`armfleet.World.remove_object`, which also takes its frame and contacts).
+        """Take the object out of its world, as :meth:`armfleet.World.remove_object` does:
+        body, frame, contacts and viewer.
+
+        Raises:
+            UnknownObject: removed already; WorldClosed: its world is closed.
+        """
+        if self._on_remove is not None:
+            self._on_remove(self.name)  # the world's removal, which discards the body
+        else:
+            self.discard_body()
+
+    @while_alive
+    def discard_body(self) -> None:
+        """Take the body out of the physics engine and end the handle; what the world
+        keeps of it (frame, contacts) is the caller's (:class:`ObjectSet`) to drop.
 
         Raises:
             UnknownObject: removed already; WorldClosed: its world is closed.
