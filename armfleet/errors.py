@@ -160,6 +160,24 @@ class WorldClosed(ArmfleetError):
         super().__init__("this world is closed; create a new armfleet.World()")
 
 
+class WorldBusy(ArmfleetError):
+    """A call that steps or changes the world, made where it would break a step:
+    from another thread while one steps it, or from inside a step (a bus subscriber).
+
+    Attributes:
+        call: what was called (``"spawn"``).
+        reason: why not now.
+    """
+
+    def __init__(self, call: str, reason: str) -> None:
+        self.call = call
+        self.reason = reason
+        super().__init__(
+            f"world.{call}() refused: {reason}; hand it to world.submit(...), which runs it "
+            f"in the stepping thread at the next step boundary"
+        )
+
+
 class InvalidNumber(ArmfleetError):
     """An argument that must be a finite real number (or numbers), not text, bool,
     complex or None, and within its range.

@@ -51,6 +51,7 @@ from armfleet.real_numbers import real_number
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
+from armfleet.step_guard import StepGuard, owning
 from armfleet.synchronised_motion import move_together
 from armfleet.tf_tree import TfTree
 from armfleet.time_step import check_dt
@@ -122,6 +123,7 @@ class World:
         self._safety = SafetySupervisor(self._contacts, lambda: self._arms, self._publish_status)
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
         self._requests = RequestQueue()
+        self._guard = StepGuard(self.close)  # one thread at a time, never inside a step
         self._viewer: Viewer | None = None
         self.viewer_error: str | None = None
         if viewer:
@@ -161,6 +163,11 @@ class World:
     def viewer(self) -> Viewer | None:
         """The MeshCat viewer, or None (not asked for, or it could not start)."""
         return self._viewer
+
+    @property
+    def step_guard(self) -> StepGuard:
+        """Which thread may step or change the world now (see :mod:`armfleet.step_guard`)."""
+        return self._guard
 
     @property
     def physics_client(self) -> int:
@@ -226,6 +233,7 @@ class World:
         return move_together({name: (self.arm(name), t) for name, t in targets.items()})
 
     # -- bring-up ---------------------------------------------------------------------
+    @owning
     def spawn(
         self,
         name: str,
@@ -305,6 +313,7 @@ class World:
         if self._viewer is not None:
             self._viewer.add_arm(arm)
 
+    @owning
     def remove(self, name: str) -> None:
         """Take the arm ``name`` out of the world: controllers, topics, transforms, body."""
         self._check_open()
@@ -333,6 +342,7 @@ class World:
         """The scene object ``name``; :class:`armfleet.UnknownObject` lists the others."""
         return self._objects.get(name)
 
+    @owning
     def add_object(
         self,
         name: str,
@@ -403,6 +413,7 @@ class World:
             self._viewer.add_object(obj)
         return obj
 
+    @owning
     def remove_object(self, name: str) -> None:
         """Take object ``name`` out of the world: body, frame, contacts, viewer."""
         self._check_open()
@@ -417,6 +428,7 @@ class World:
             raise NameInUse(name, used_by, list(self._arms), list(self._objects.objects))
 
     # -- stepping ---------------------------------------------------------------------
+    @owning
     def step(self) -> None:
         """Advance one physics step, as ros2_control's loop around the physics.
 
@@ -427,20 +439,23 @@ class World:
         """
         self._check_open()
         self._requests.drain()
-        stamp = self.time
-        self._controllers.update(stamp, self._step_index)
-        self._memory.write()
-        p.stepSimulation(physicsClientId=self._client)
-        self._step_index += 1
-        self._memory.read()
-        self._objects.after_step(self.time)
-        self._contacts.scan(self.time)
-        self._safety.after_scan()
-        if self._step_index % self._status_period_steps == 0:
-            for arm in self._arms.values():
-                self._publish_status(arm)
-        if self._viewer is not None:
-            self._viewer.tick(self)
+        if self.closed:  # a request closed it
+            return
+        with self._guard.stepping():  # subscribers run from here on: WorldBusy if they step
+            stamp = self.time
+            self._controllers.update(stamp, self._step_index)
+            self._memory.write()
+            p.stepSimulation(physicsClientId=self._client)
+            self._step_index += 1
+            self._memory.read()
+            self._objects.after_step(self.time)
+            self._contacts.scan(self.time)
+            self._safety.after_scan()
+            if self._step_index % self._status_period_steps == 0:
+                for arm in self._arms.values():
+                    self._publish_status(arm)
+            if self._viewer is not None:
+                self._viewer.tick(self)
 
     @property
     def safety(self) -> SafetySupervisor:
@@ -458,6 +473,7 @@ class World:
     def _publish_status(self, arm: Arm) -> None:
         self._bus.publish(f"/{arm.name}/status", arm.status(self.time))
 
+    @owning
     def run(
         self,
         duration: float,
@@ -470,16 +486,30 @@ class World:
         Args:
             duration: simulated time to advance [s], in [0, 1e6]: longer is a typo.
             realtime: pace the steps to the wall clock instead of running flat out.
-            on_step: called after every step (e.g. for logging).
+            on_step: called after every step (e.g. for logging); it may spawn, remove
+                or close (then run returns), as bus subscribers may not.
+
+        Raises:
+            WorldBusy: another thread is stepping the world, or run was called from
+                inside a step (a bus subscriber).
         """
         duration = RUN_DURATION_S.check(duration, "duration")  # as the CLI's --duration
         realtime = flag(realtime, "realtime")
+        if on_step is not None and not callable(on_step):
+            raise ArmfleetError(
+                f"run: on_step takes a function of the world (or None), "
+                f"got {type(on_step).__name__}"
+            )
         steps = round(duration / self._dt)
         wall_start, sim_start = time.perf_counter(), self.time
         for _ in range(steps):
             self.step()
-            if on_step is not None:
+            if on_step is not None and not self.closed:
                 on_step(self)
+            if self._guard.take_close():  # asked from a subscriber or another thread
+                self.close()
+            if self.closed:
+                return
             if realtime:
                 ahead = (self.time - sim_start) - (time.perf_counter() - wall_start)
                 if ahead > 0.002:
@@ -498,8 +528,11 @@ class World:
 
     def close(self) -> None:
         """Disconnect the physics engine; the world can no longer be used, nor any
-        handle of it (arms, grippers, ``tf``, objects raise :class:`WorldClosed`)."""
-        if self._lifetime.alive:
+        handle of it (arms, grippers, ``tf``, objects raise :class:`WorldClosed`).
+
+        From inside a step (a bus subscriber) or from another thread while one steps
+        the world, the world closes once that step is over (``run`` then returns)."""
+        if self._lifetime.alive and self._guard.close_or_defer():
             try:
                 # First, while the handles still work: its refresher thread reads them.
                 if self._viewer is not None:

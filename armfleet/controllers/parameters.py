@@ -58,8 +58,12 @@ def load_parameters(
         ParameterError: unknown key (with a "did you mean"), wrong type or out of bounds.
     """
     path = path or controller_file(controller)
-    if not path.is_file():
-        raise ParameterError(f"{path}: controller parameter file not found")
+    if not path.is_file():  # a directory, device or pipe is no file to read either
+        problem = "is not a regular file" if path.exists() else "not found"
+        raise ParameterError(
+            f"{path}: controller parameter file {problem}; give a YAML file "
+            f"like {controller_file(controller)}"
+        )
     stat = path.stat()
     document = _parsed(path, stat.st_mtime_ns, stat.st_size)
     if not isinstance(document, LocatedDict) or controller not in document:

@@ -1,0 +1,124 @@
+"""Who may change a world now: one thread at a time, and never from inside a step.
+
+A :class:`armfleet.World` is single-threaded (PyBullet and the controllers are
+not thread-safe) and its step is not reentrant: bus subscribers run in the
+middle of it, while the controllers, the contact scan and the status loop are
+iterating over the arms. So the calls that step the world or change what is in
+it (``step``, ``run``, ``spawn``, ``remove``, ``add_object``, ``remove_object``)
+take the world through :meth:`StepGuard.owned`:
+
+- the thread inside them owns the world until the outermost call returns (a
+  spawn's bring-up, which steps the world from inside ``spawn``, is that same
+  thread going deeper, and allowed);
+- another thread is refused with :class:`WorldBusy` (it hands its work to the
+  stepping thread with ``world.submit``);
+- a call from inside a step (a bus subscriber) is refused with
+  :class:`WorldBusy` too: removing an arm while the status loop iterates over
+  the arms, or stepping inside a step, broke the step in progress.
+
+``close`` is the one call that is never refused: from another thread or from
+inside a step it is put off to the end of the step (:meth:`StepGuard.close_or_defer`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import threading
+from collections.abc import Callable, Iterator
+from typing import Concatenate, ParamSpec, Protocol, TypeVar
+
+from armfleet.errors import WorldBusy
+
+
+class StepGuard:
+    """The owner thread of a world and whether it is inside a step.
+
+    Args:
+        close: closes the world; called when the owner lets go and a close was put off.
+    """
+
+    def __init__(self, close: Callable[[], None]) -> None:
+        self._close = close
+        self._lock = threading.Lock()
+        self._owner: int | None = None
+        self._depth = 0
+        self._in_step = False
+        self._close_pending = False
+
+    @contextlib.contextmanager
+    def owned(self, call: str) -> Iterator[None]:
+        """Own the world for ``call`` (e.g. ``"spawn"``) in the calling thread.
+
+        Raises:
+            WorldBusy: another thread owns it, or the call comes from inside a step.
+        """
+        me = threading.get_ident()
+        with self._lock:
+            if self._owner is not None and self._owner != me:
+                raise WorldBusy(call, "another thread is stepping or changing this world")
+            if self._in_step:
+                raise WorldBusy(call, "it was called from inside a step (a bus subscriber)")
+            self._owner = me
+            self._depth += 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._depth -= 1
+                if self._depth == 0:
+                    self._owner = None
+                due = self._depth == 0 and self._close_pending
+                self._close_pending = self._close_pending and not due
+            if due:
+                self._close()
+
+    @contextlib.contextmanager
+    def stepping(self) -> Iterator[None]:
+        """Mark the body of a step, where subscribers run and the world must not change."""
+        self._in_step = True
+        try:
+            yield
+        finally:
+            self._in_step = False
+
+    def close_or_defer(self) -> bool:
+        """Whether ``close`` may run now; if not, it is noted for :meth:`take_close`."""
+        with self._lock:
+            if (self._owner is None or self._owner == threading.get_ident()) and not (
+                self._in_step
+            ):
+                return True
+            self._close_pending = True
+            return False
+
+    def take_close(self) -> bool:
+        """Whether a put-off ``close`` is due now: asked between steps by the outermost
+        owning call (``run``), which then closes the world and returns."""
+        with self._lock:
+            due = self._close_pending and self._depth == 1 and not self._in_step
+            self._close_pending = self._close_pending and not due
+            return due
+
+
+class Guarded(Protocol):
+    """Anything with a :class:`StepGuard` (a world)."""
+
+    @property
+    def step_guard(self) -> StepGuard: ...
+
+
+P = ParamSpec("P")
+R = TypeVar("R")
+G = TypeVar("G", bound=Guarded)
+
+
+def owning(method: Callable[Concatenate[G, P], R]) -> Callable[Concatenate[G, P], R]:
+    """Wrap a world's ``method`` so it runs owning the world (see :meth:`StepGuard.owned`)."""
+
+    @functools.wraps(method)
+    def owned(self: G, /, *args: P.args, **kwargs: P.kwargs) -> R:
+        with self.step_guard.owned(method.__name__):
+            return method(self, *args, **kwargs)
+
+    return owned

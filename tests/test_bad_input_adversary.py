@@ -1,0 +1,390 @@
+"""Bad input the earlier catalogues did not list, tried as an outside auditor would (issue #14).
+
+Three groups:
+
+- **Refused in one line, world untouched** (``check_rejected`` of ``test_bad_input``: same
+  arms, bodies, time and reference, nothing commanded, bob still holding within 1e-4 rad).
+  Most are guards of classes that were already handled; ``run(on_step=5)`` was not: it
+  stepped the world once, then died with ``TypeError``.
+- **Reentrancy**: a bus subscriber runs in the middle of a step, while the controllers,
+  the contact scan and the status loop iterate over the arms. A subscriber that removes
+  an arm broke that loop (``RuntimeError: dictionary changed size during iteration``
+  out of ``run``), one that steps stepped inside the step (``run(0.01)`` advanced
+  13 ms), one that spawns brought an arm up inside the step, one that closes made the
+  rest of the step call a disconnected PyBullet (``pybullet.error``). Now the changing
+  calls are refused there with :class:`~armfleet.errors.WorldBusy` (the bus logs and
+  drops that subscriber; the world goes on), and ``close`` is put off to the end of
+  the step.
+- **Another thread**: ``step``/``spawn`` from a second thread while ``run`` steps the
+  world ran two threads in PyBullet and the controllers at once; now ``WorldBusy``
+  tells it to use ``world.submit``, and the running world is untouched.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pybullet as p
+import pytest
+
+import armfleet
+from armfleet.bus import TopicError
+from armfleet.errors import (
+    ArmfleetError,
+    NoGripper,
+    ObjectError,
+    ParameterError,
+    UnknownArm,
+    UnreachablePose,
+    WorldBusy,
+)
+from armfleet.recording import RecordingError
+from armfleet.recording.errors import NotARecording
+from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
+    HOLD_CHECK_S,
+    HOLD_DRIFT_RAD,
+    BadInput,
+    Scene,
+    check_rejected,
+    scene,
+)
+
+#: A pose 5 m from bob's base: out of a Panda's 0.855 m reach whatever the IK does.
+FAR_POSE = np.array([[1, 0, 0, 5.0], [0, 1, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1]])
+
+
+def case(action: object, error: type[ArmfleetError], *expected: str, id: str) -> object:
+    return pytest.param(BadInput(action, error, lambda w, b: expected), id=id)  # type: ignore[arg-type]
+
+
+def not_mcap(world: armfleet.World, bob: armfleet.Arm) -> object:
+    Path("notes.mcap").write_text("hello, not a recording")
+    return armfleet.open_recording("notes.mcap")
+
+
+def fifo_parameters(world: armfleet.World, bob: armfleet.Arm) -> object:
+    os.mkfifo("gains.yaml")  # nobody writes to it: opening it would block for ever
+    return world.spawn("k", at=(0, 3), parameter_files={"position_controller": "gains.yaml"})
+
+
+REFUSED = [
+    case(
+        lambda w, b: w.run(0.01, on_step=5),
+        ArmfleetError, "on_step takes a function", "got int",
+        id="run on_step=5, not a function -> refused before any step (was TypeError after one)",
+    ),
+    case(
+        lambda w, b: w.move_together({}),
+        ArmfleetError, "needs at least one arm",
+        id="move_together {} -> asks for at least one arm",
+    ),
+    case(
+        lambda w, b: w.move_together({"bob": b.positions, "ghost": b.positions}),
+        UnknownArm, "no arm named 'ghost'", "arms: bob",
+        id="move_together with an unknown arm beside bob -> UnknownArm, bob does not move either",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(FAR_POSE),
+        UnreachablePose, "cannot reach the pose", "choose a pose within the arm's reach",
+        id="move_to_pose 5 m away -> UnreachablePose at once, no hang, nothing moved",
+    ),
+    case(
+        lambda w, b: w.spawn("k", at=(0, 3), parameters={"position_controller": {"kp_s2": -1.0}}),
+        ParameterError, "kp_s2 = -1.0 is outside [0, 1e+06]",
+        id="negative gain kp_s2=-1 -> ParameterError with its range",
+    ),
+    case(
+        lambda w, b: w.spawn(
+            "k", at=(0, 3), parameters={"position_controller": {"kd_s": math.nan}}
+        ),
+        ParameterError, "kd_s", "nan",
+        id="gain kd_s=nan -> ParameterError",
+    ),
+    case(
+        lambda w, b: w.spawn(
+            "k", at=(0, 3), parameter_files={"position_controller": "/dev/zero"}
+        ),
+        ParameterError, "/dev/zero: controller parameter file is not a regular file",
+        "position_controller.yaml",
+        id="parameter file /dev/zero -> not a regular file (was 'not found'), no endless read",
+    ),
+    case(
+        lambda w, b: w.spawn("k", at=(0, 3), parameter_files={"position_controller": "."}),
+        ParameterError, ".: controller parameter file is not a regular file",
+        "give a YAML file like", "position_controller.yaml",
+        id="parameter file a directory -> not a regular file (was 'not found')",
+    ),
+    case(
+        fifo_parameters,
+        ParameterError, "gains.yaml: controller parameter file is not a regular file",
+        id="parameter file a FIFO -> not a regular file, no hang",
+    ),
+    case(
+        lambda w, b: w.add_object("cube", "box", size=(1e6, 1e6, 1e6), at=(2, 2, 0.5)),
+        ObjectError, "each must be in (0, 100] m",
+        id="box of 1e6 m -> ObjectError with the size range",
+    ),
+    case(
+        lambda w, b: w.add_object("cube", "box", size=(0, 0.1, 0.1), at=(2, 2, 0.5)),
+        ObjectError, "each must be in (0, 100] m",
+        id="box of size 0 -> ObjectError with the size range",
+    ),
+    case(
+        lambda w, b: w.add_object("cube", "box", size=(0.1,) * 3, mass=-1, at=(2, 2, 0.5)),
+        ObjectError, "mass: -1.0 is outside [0, 10000] kg",
+        id="negative mass -> ObjectError with the mass range",
+    ),
+    case(
+        lambda w, b: w.add_object(
+            "cube", "box", size=(0.1,) * 3, friction=math.nan, at=(2, 2, 0.5)
+        ),
+        ObjectError, "friction: nan is outside [0, 10]",
+        id="friction nan -> ObjectError with the friction range",
+    ),
+    case(
+        lambda w, b: w.add_object(
+            "cube", "box", size=(0.1,) * 3, color=(2, 0, 0, 1), at=(2, 2, 0.5)
+        ),
+        ObjectError, "give RGBA in [0, 1]",
+        id="colour component 2 -> ObjectError asking for RGBA in [0, 1]",
+    ),
+    case(
+        lambda w, b: w.add_object("blob", "mesh", mesh=".", at=(2, 2, 0.5)),
+        ObjectError, "use one of .obj, .stl",
+        id="mesh path a directory -> ObjectError naming the mesh formats",
+    ),
+    case(
+        lambda w, b: w.bus.publish("/bob/position_controller/commands", "home"),
+        TopicError, "carries JointCommand, got str",
+        id="text published on bob's command topic -> TopicError naming the type",
+    ),
+    case(
+        lambda w, b: w.bus.subscribe("/bob/../x y\n", print),
+        TopicError, "is malformed", "/bob/joint_states",
+        id="topic with '..', a space and a newline -> TopicError with the topic rule",
+    ),
+    case(
+        not_mcap,
+        NotARecording, "not an MCAP recording",
+        id="open_recording of a text file -> RecordingError, not MCAP",
+    ),
+    case(
+        lambda w, b: w.record("."),
+        RecordingError, ".",
+        id="record() to a directory -> RecordingError, nothing recorded",
+    ),
+]  # fmt: skip
+
+
+@pytest.fixture(autouse=True)
+def in_tmp_path(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Files a case writes go to the test's own folder."""
+    monkeypatch.chdir(tmp_path)
+
+
+@pytest.mark.parametrize("bad", REFUSED)
+def test_refused_in_one_line_and_the_world_untouched(
+    scene: Scene,  # noqa: F811
+    bad: BadInput,
+) -> None:
+    objects = list(scene.world.objects)
+    check_rejected(scene, bad)
+    assert list(scene.world.objects) == objects
+
+
+def test_gripper_commands_on_a_model_without_one(world: armfleet.World) -> None:
+    """Guard: gripper close on a UR5 -> NoGripper naming a model that has one; u holds."""
+    u = world.spawn("u", model="ur5")
+    held = u.positions
+    commands: list[Callable[[], object]] = [
+        lambda: u.gripper.close(),
+        lambda: u.gripper.move_to(0.01),
+    ]
+    for command in commands:
+        with pytest.raises(NoGripper, match=r"u \(ur5\) has no gripper.*e\.g\. panda"):
+            command()
+    world.run(HOLD_CHECK_S)
+    assert np.abs(u.positions - held).max() < HOLD_DRIFT_RAD
+
+
+# -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------
+Reaction = Callable[[armfleet.World], object]
+
+REENTRANT = [
+    pytest.param(
+        lambda w: w.remove("carl"), "remove",
+        id="subscriber removes an arm mid-step -> WorldBusy, carl stays (was RuntimeError)",
+    ),
+    pytest.param(
+        lambda w: w.step(), "step",
+        id="subscriber steps inside the step -> WorldBusy, time advances as run says",
+    ),
+    pytest.param(
+        lambda w: w.spawn("dan", at=(0, -2)), "spawn",
+        id="subscriber spawns mid-step -> WorldBusy, no arm brought up inside a step",
+    ),
+    pytest.param(
+        lambda w: w.add_object("cube", "box", size=(0.05,) * 3, at=(2, 2, 0.025)), "add_object",
+        id="subscriber adds an object mid-step -> WorldBusy, nothing added",
+    ),
+    pytest.param(
+        lambda w: w.run(0.01), "run",
+        id="subscriber runs the world mid-step -> WorldBusy",
+    ),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("react", "call"), REENTRANT)
+def test_a_subscriber_cannot_change_the_world_mid_step(
+    world: armfleet.World, react: Reaction, call: str
+) -> None:
+    bob = world.spawn("bob")
+    world.spawn("carl", at=(0, 2))
+    bodies = p.getNumBodies(physicsClientId=world.physics_client)
+    tried: list[int] = []
+
+    def on_status(message: object) -> None:
+        if not tried:
+            tried.append(1)
+            react(world)
+
+    world.bus.subscribe("/bob/status", on_status)
+    start, held = world.time, bob.positions
+    world.run(0.3)  # /bob/status comes every 0.1 s: the subscriber reacts once
+
+    assert tried == [1]
+    assert world.time == pytest.approx(start + 0.3, abs=world.dt / 2)  # no step inside a step
+    assert list(world.arms) == ["bob", "carl"]
+    assert list(world.objects) == []
+    assert p.getNumBodies(physicsClientId=world.physics_client) == bodies
+    failure = world.bus.failures[-1]
+    assert isinstance(failure.error, WorldBusy)
+    assert failure.error.call == call
+    message = str(failure.error)
+    assert "\n" not in message
+    assert "inside a step" in message and "world.submit" in message
+    assert np.abs(bob.positions - held).max() < HOLD_DRIFT_RAD
+    # What the message says works: the same call handed to submit runs at the next boundary.
+    if call == "remove":
+        world.submit(lambda: react(world))
+        world.run(HOLD_CHECK_S)
+        assert list(world.arms) == ["bob"]
+
+
+def test_a_subscriber_closing_the_world_ends_run_after_that_step(world: armfleet.World) -> None:
+    """Was: the rest of the step called a disconnected PyBullet, ``pybullet.error`` from run."""
+    world.spawn("bob")
+    world.bus.subscribe("/bob/joint_states", lambda message: world.close())
+    world.run(1.0)  # returns, no error
+    assert world.closed
+    with pytest.raises(armfleet.WorldClosed):
+        world.run(0.01)
+
+
+def test_on_step_may_close_the_world_and_run_returns(world: armfleet.World) -> None:
+    """on_step runs between steps: it may close; run stops there instead of stepping on."""
+    world.spawn("bob")
+    seen: list[float] = []
+
+    def close_at_first(w: armfleet.World) -> None:
+        seen.append(w.time)
+        w.close()
+
+    world.run(1.0, on_step=close_at_first)
+    assert len(seen) == 1
+    assert world.closed
+
+
+def test_on_step_may_spawn_between_steps(world: armfleet.World) -> None:
+    """Guard: on_step is between steps, so changing the world there is allowed."""
+    world.spawn("bob")
+
+    def spawn_once(w: armfleet.World) -> None:
+        if "carl" not in w.arms:
+            w.spawn("carl", at=(0, 2))
+
+    world.run(0.05, on_step=spawn_once)
+    assert list(world.arms) == ["bob", "carl"]
+    assert world.arm("carl").position_controller.is_holding
+
+
+# -- another thread while the world runs -------------------------------------------------
+OTHER_THREAD = [
+    pytest.param(lambda w: w.step(), id="step from a 2nd thread during run -> WorldBusy"),
+    pytest.param(
+        lambda w: w.spawn("dan", at=(0, -2)),
+        id="spawn from a 2nd thread during run -> WorldBusy, use submit",
+    ),
+    pytest.param(lambda w: w.remove("carl"), id="remove from a 2nd thread during run -> WorldBusy"),
+]
+
+
+@pytest.mark.parametrize("act", OTHER_THREAD)
+def test_another_thread_cannot_step_or_change_a_running_world(
+    world: armfleet.World, act: Reaction
+) -> None:
+    bob = world.spawn("bob")
+    world.spawn("carl", at=(0, 2))
+    errors: list[BaseException] = []
+
+    def in_other_thread() -> None:
+        try:
+            act(world)
+        except BaseException as exc:
+            errors.append(exc)
+
+    def at_first_step(w: armfleet.World) -> None:
+        if not errors:
+            thread = threading.Thread(target=in_other_thread)
+            thread.start()
+            thread.join()  # the other thread acts while run owns the world
+
+    start, held = world.time, bob.positions
+    world.run(0.2, on_step=at_first_step)
+    assert len(errors) == 1
+    assert type(errors[0]) is WorldBusy
+    message = str(errors[0])
+    assert "another thread" in message and "world.submit" in message and "\n" not in message
+    assert world.time == pytest.approx(start + 0.2, abs=world.dt / 2)
+    assert list(world.arms) == ["bob", "carl"]
+    assert np.abs(bob.positions - held).max() < HOLD_DRIFT_RAD
+
+
+def test_close_from_another_thread_during_run_ends_run_cleanly(world: armfleet.World) -> None:
+    """The close is put off to the end of the step in progress; run returns without error."""
+    world.spawn("bob")
+    steps: list[float] = []
+
+    def at_step(w: armfleet.World) -> None:
+        steps.append(w.time)
+        if len(steps) == 1:
+            closer = threading.Thread(target=w.close)
+            closer.start()
+            closer.join()
+            assert not w.closed  # not under the step's feet
+
+    world.run(1.0, on_step=at_step)
+    assert world.closed
+    assert len(steps) == 1
+
+
+def test_submit_from_another_thread_is_the_way(world: armfleet.World) -> None:
+    """Guard: what WorldBusy points to works while run steps the world."""
+    world.spawn("bob")
+    futures: list[object] = []
+
+    def at_step(w: armfleet.World) -> None:
+        if not futures:
+            thread = threading.Thread(
+                target=lambda: futures.append(w.submit(lambda: w.spawn("dan", at=(0, -2))))
+            )
+            thread.start()
+            thread.join()
+
+    world.run(0.05, on_step=at_step)
+    assert list(world.arms) == ["bob", "dan"]
