@@ -48,6 +48,10 @@ HANG_S = 120
 WAIT_RANGE = "give seconds in [0, 600]"
 TIMEOUT_RANGE = "give seconds in [0.001, 600]"
 STEP_RANGE = "give steps, an integer in 1..100000"
+#: A folder that exists wherever the tests run.
+TESTS_DIR = Path(__file__).parent
+#: An error line stays readable: a value echoed back is cut short [characters].
+LONGEST_LINE = 1000
 
 
 BAD = [
@@ -208,6 +212,89 @@ BAD = [
     pytest.param(
         ["info", "--connect", ""], ["address '' is malformed"], id="empty --connect address"
     ),
+    # -- positional arguments taken by an option of several values (one rule for all) ----
+    pytest.param(
+        ["spawn", "--model", "ur5", "carl", "--at", "0,1.5"],
+        ["--model took 'carl' as a model", "'armfleet spawn carl --model ur5 --at 0,1.5'"],
+        id="name after --model -> --model took it, put names first (not 'required: NAME')",
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,1.5", "--model", "ur5", "dave"],
+        ["--model took 'dave' as a model", "'armfleet spawn carl dave --at 0,1.5 --model ur5'"],
+        id="one name after --model -> --model took it, not a count mismatch",
+    ),
+    pytest.param(
+        ["move", "--joints", *AWAY, "bob"],
+        ["--joints took 'bob' as a value", f"'armfleet move bob --joints {' '.join(AWAY)}'"],
+        id="name after --joints -> --joints took it (not 'invalid float'), nothing moves",
+    ),
+    pytest.param(
+        ["plot", "--arm", "bob", "run.mcap"],
+        ["--arm took 'run.mcap' as an arm name", "'armfleet plot run.mcap --arm bob'"],
+        id="recording after plot --arm -> --arm took it, put it first",
+    ),
+    # -- unknown options: checked first, with the command's own options -------------------
+    pytest.param(
+        ["spawn", "carl", "--wiat"],
+        ["unknown option '--wiat'", "(options: --help, --at, --model,"],
+        id="unknown spawn option -> named with spawn's options (not 'required: --at')",
+    ),
+    pytest.param(
+        ["move", "bob", "--wait-timout", "3"],
+        ["unknown option '--wait-timout'; did you mean '--wait-timeout'?"],
+        id="misspelt move option -> did you mean, from move's own options",
+    ),
+    # -- paths: a folder, an empty path -----------------------------------------------------
+    pytest.param(
+        ["launch", str(TESTS_DIR)],
+        [f"{TESTS_DIR}: is a folder; give a spec file (.yaml) or a shipped spec's name: "],
+        id="launch a folder -> it is a folder, give a spec file or a shipped name",
+    ),
+    pytest.param(
+        ["plot", ""],
+        ["argument RUN.mcap: the path is empty"],
+        id="plot '' -> the path is empty (not '.')",
+    ),
+    pytest.param(
+        ["replay", ""], ["argument RUN.mcap: the path is empty"], id="replay '' -> path is empty"
+    ),
+    pytest.param(
+        ["info", ""], ["argument RUN.mcap: the path is empty"], id="info '' -> path is empty"
+    ),
+    pytest.param(
+        ["recover", ""],
+        ["argument RUN.mcap: the path is empty"],
+        id="recover '' -> path is empty (not a traceback)",
+    ),
+    pytest.param(
+        ["recover", "run.mcap", "-o", " "],
+        ["argument -o/--output: the path is blank (' ')"],
+        id="recover -o blank -> path is blank",
+    ),
+    pytest.param(
+        ["launch", ""], ["argument SPEC: the path is empty"], id="launch '' -> path is empty"
+    ),
+    pytest.param(
+        ["spawn", "carl", "--at", "0,1.5", "--new-world", "--duration", "0", "--record", ""],
+        ["argument --record: the path is empty"],
+        id="spawn --record '' -> path is empty",
+    ),
+    # -- audit: repeated options, 100 kB values ------------------------------------------------
+    pytest.param(
+        ["spawn", "carl", "--at", "0,1.5", "--at", "1,1.5"],
+        ["--at is given twice; give it once (all its values after one)"],
+        id="--at given twice -> refused (the last won: carl came up at the second pose)",
+    ),
+    pytest.param(
+        ["launch", "a" * 100_000],
+        ["cannot be read (File name too long)"],
+        id="launch with a 100 kB name -> one short line (not an OSError traceback)",
+    ),
+    pytest.param(
+        ["info", "--connect", "b" * 100_000],
+        [f"address '{'b' * 95}...(100002 characters) is malformed"],
+        id="--connect 100 kB -> one short line (the value was echoed whole)",
+    ),
 ]
 
 
@@ -271,7 +358,8 @@ def test_a_bad_command_is_one_line_and_exit_2(
     assert "Traceback" not in result.stderr
     assert result.stdout == ""  # nothing was done, nothing to report
     lines = result.stderr.splitlines()
-    assert len(lines) == 1, result.stderr
+    assert len(lines) == 1, result.stderr[:LONGEST_LINE]
+    assert len(lines[0]) <= LONGEST_LINE, lines[0][:LONGEST_LINE]
     assert lines[0].startswith("armfleet: error: ")
     for fragment in fragments:
         assert fragment in lines[0]
@@ -290,6 +378,91 @@ def test_after_the_bad_commands_the_world_is_untouched(
         assert np.abs(bob.positions - PANDA_HOME).max() < HOLD_TOLERANCE_RAD
         assert abs(bob.gripper.width - START_WIDTH_M) < WIDTH_TOLERANCE_M
         assert client.info().streams == 0
+
+
+PORT_TAKEN = "(Address already in use)"
+
+
+@pytest.mark.parametrize(
+    "option",
+    [
+        pytest.param(
+            "--api-port",
+            id="--api-port taken -> refused before any arm comes up (it failed after bring-up)",
+        ),
+        pytest.param(
+            "--viewer-port",
+            id="--viewer-port taken -> refused (the run went on without its viewer, exit 0)",
+        ),
+    ],
+)
+def test_a_port_in_use_is_refused_before_the_world_starts(world: WorldProcess, option: str) -> None:
+    """The running world's API port is taken for sure; a new world asked to listen there
+    stops at once, in one line, with nothing on stdout (no bring-up, no viewer URL)."""
+    port = world.address.rsplit(":", 1)[1]
+    result = cli(
+        world.runtime_dir, "spawn", "carl", "--at", "0,0", "--new-world", "--duration", "0",
+        option, port,
+    )  # fmt: skip
+    assert result.returncode == 2, result.stderr
+    assert result.stdout == ""
+    assert result.stderr.splitlines() == [
+        f"armfleet: error: {option} {port}: cannot listen on 127.0.0.1:{port} {PORT_TAKEN}; "
+        + ("choose another, or 0 for a free one" if option == "--api-port" else "choose "
+           "another, or leave it out")
+    ]  # fmt: skip
+
+
+# -- item 5: --help shows each numeric option's valid range ------------------------------------
+
+SECONDS_WAIT = "seconds in [0, 600]"
+SECONDS_ANSWER = "seconds in [0.001, 600]"
+SECONDS_RUN = "seconds in [0, 1000000]"
+USER_PORT = "a TCP port, an integer in 1..65535"
+API_PORT = "a TCP port (0: a free one), an integer in 0..65535"
+
+HELP_RANGES = {
+    "spawn": {"--duration S": SECONDS_RUN, "--viewer-port PORT": USER_PORT,
+              "--api-port PORT": API_PORT, "--timeout S": SECONDS_ANSWER},
+    "launch": {"--duration S": SECONDS_RUN, "--viewer-port PORT": USER_PORT,
+               "--api-port PORT": API_PORT},
+    "move": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
+    "move-together": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
+    "grip": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
+    "step": {"N": "steps, an integer in 1..100000", "--timeout S": SECONDS_ANSWER},
+    "arms": {"--timeout S": SECONDS_ANSWER},
+    "info": {"--timeout S": SECONDS_ANSWER},
+    "replay": {"--speed X": "a factor (times real time) in [0.001, 1000]",
+               "--viewer-port PORT": USER_PORT},
+}  # fmt: skip
+
+
+def help_entries(text: str) -> dict[str, str]:
+    """Each argument's entry of a --help text, by its first line's start, on one line."""
+    entries: dict[str, list[str]] = {}
+    current: list[str] = []
+    for line in text.splitlines():
+        if re.match(r"^  \S", line):
+            current = [line.strip()]
+            head = re.split(r"\s{2,}", line.strip())[0]
+            entries[head] = current
+        elif line.startswith("   ") and current:
+            current.append(line.strip())
+        else:
+            current = []
+    return {head: " ".join(" ".join(lines).split()) for head, lines in entries.items()}
+
+
+@pytest.mark.parametrize("command", list(HELP_RANGES))
+def test_help_shows_the_range_of_each_numeric_option(command: str) -> None:
+    result = subprocess.run(
+        [*ARMFLEET, command, "--help"], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 0, result.stderr
+    entries = help_entries(result.stdout)
+    for head, valid in HELP_RANGES[command].items():
+        assert head in entries, (head, list(entries))
+        assert entries[head].endswith(f"; valid: {valid}"), entries[head]
 
 
 # -- the same ranges in the live API and the Python client ------------------------------------

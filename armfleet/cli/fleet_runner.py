@@ -10,6 +10,7 @@ import time
 from types import FrameType
 
 from armfleet.cli.api_options import check_api_arguments, start_api
+from armfleet.cli.listen_ports import check_run_ports
 from armfleet.cli.record_option import RunRecording
 from armfleet.cli.status_line import status_line
 from armfleet.cli.world_loop import run_world
@@ -27,6 +28,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
     recording = RunRecording(args.record, spec, quiet=args.quiet)
     viewer = (spec.world.viewer and not args.no_viewer) or recording.needs_viewer
     realtime = spec.world.realtime if args.realtime is None else args.realtime
+    check_run_ports(args, viewer)
 
     def say(line: str) -> None:
         if not args.quiet:

@@ -6,6 +6,7 @@ import argparse
 
 from armfleet.cli.fleet_runner import run_fleet
 from armfleet.cli.parser import OneLineParser
+from armfleet.cli.path_arguments import path_text
 from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.spec import load_spec
 
@@ -17,7 +18,9 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         description="Bring up the world a launch spec describes, one arm at a time. SPEC is "
         "a file, or the name of a shipped spec (e.g. bob_and_toby).",
     )
-    parser.add_argument("spec", metavar="SPEC", help="launch spec file or shipped spec name")
+    parser.add_argument(
+        "spec", type=path_text, metavar="SPEC", help="launch spec file or shipped spec name"
+    )
     parser.add_argument(
         "--check", action="store_true", help="validate the spec and exit without running"
     )

@@ -9,7 +9,6 @@ valid range, e.g. ``argument --wait-timeout: 'nan' is invalid; give seconds in [
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 
 from armfleet.number_ranges import (
     PORT,
@@ -23,28 +22,43 @@ from armfleet.number_ranges import (
 )
 
 
-def number_in(valid: NumberRange) -> Callable[[str], float]:
-    """An argparse ``type=`` that reads a number in ``valid`` or refuses it in one line."""
+class NumberArgument:
+    """An argparse ``type=`` that reads a number in ``valid`` or refuses it in one line.
 
-    def parse(text: str) -> float:
+    The help of an argument of this type ends with its range (see
+    :class:`armfleet.cli.parser.OneLineParser`), taken from ``valid``.
+
+    Attributes:
+        valid: the range of the number.
+    """
+
+    def __init__(self, valid: NumberRange) -> None:
+        self.valid = valid
+        # argparse names the type by it in some messages.
+        self.__name__ = valid.meaning
+
+    def __call__(self, text: str) -> float:
         try:
-            return valid.parse(text)
+            return self.valid.parse(text)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
-    parse.__name__ = valid.meaning  # argparse names the type by it in some messages
-    return parse
+
+class IntegerArgument(NumberArgument):
+    """Like :class:`NumberArgument`, for a range of integers."""
+
+    def __call__(self, text: str) -> int:
+        return int(super().__call__(text))
 
 
-def integer_in(valid: NumberRange) -> Callable[[str], int]:
+def number_in(valid: NumberRange) -> NumberArgument:
+    """An argparse ``type=`` that reads a number in ``valid`` or refuses it in one line."""
+    return NumberArgument(valid)
+
+
+def integer_in(valid: NumberRange) -> IntegerArgument:
     """Like :func:`number_in`, for a range of integers."""
-    read = number_in(valid)
-
-    def parse(text: str) -> int:
-        return int(read(text))
-
-    parse.__name__ = valid.meaning
-    return parse
+    return IntegerArgument(valid)
 
 
 #: ``--timeout``: a wait for the world's answer [s].

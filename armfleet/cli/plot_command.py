@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import re
 
+from armfleet.cli.misplaced_values import ValueTest
 from armfleet.cli.parser import OneLineParser
+from armfleet.cli.path_arguments import path_text
+from armfleet.names import ARM_NAME_PATTERN
 from armfleet.recording import open_recording, plot_recording
 
 
@@ -17,17 +21,21 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         "/<arm>/position_controller/state messages of a recording (armfleet spawn/launch "
         "--record RUN.mcap).",
     )
-    parser.add_argument("recording", metavar="RUN.mcap", help="the recording")
+    parser.add_argument("recording", type=path_text, metavar="RUN.mcap", help="the recording")
     parser.add_argument(
         "--arm", nargs="+", default=None, metavar="NAME",
         help="arms to plot (default: every arm with a recorded controller state)",
     )  # fmt: skip
     parser.add_argument(
-        "-o", "--output", default=None, metavar="OUT.png",
+        "-o", "--output", type=path_text, default=None, metavar="OUT.png",
         help="figure file (.png, .svg or .pdf; with several arms, <OUT>_<arm>.png), or an "
         "existing folder (default: <RUN>_<arm>.png beside the recording)",
     )  # fmt: skip
     parser.set_defaults(run=run)
+    # A recording typed after --arm ends up there: what is not an arm name was meant as it.
+    parser.value_tests["--arm"] = ValueTest(
+        "arm name", lambda text: re.match(ARM_NAME_PATTERN, text) is not None
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -10,6 +10,7 @@ import argparse
 from collections.abc import Callable
 
 from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.path_arguments import path_text
 from armfleet.recording import Recording, open_recording
 
 
@@ -17,7 +18,7 @@ def extend_info_parser(parser: OneLineParser) -> None:
     """Give ``armfleet info`` an optional recording to describe instead of the running world."""
     world_info: Callable[[argparse.Namespace], int] = parser.get_default("run")
     parser.add_argument(
-        "recording", nargs="?", default=None, metavar="RUN.mcap",
+        "recording", nargs="?", type=path_text, default=None, metavar="RUN.mcap",
         help="describe this recording instead of the running world",
     )  # fmt: skip
     parser.description = (

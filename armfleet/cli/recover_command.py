@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from armfleet.cli.parser import OneLineParser
+from armfleet.cli.path_arguments import path_text
 from armfleet.recording.recover import recover
 
 
@@ -18,9 +19,11 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         "summary, as the mcap CLI's recover does. A recording cut short by kill -9 or a crash "
         "has no summary: most MCAP readers then find no messages in it. RUN.mcap is only read.",
     )
-    parser.add_argument("recording", metavar="RUN.mcap", help="the recording to recover")
     parser.add_argument(
-        "-o", "--output", default=None, metavar="OUT.mcap",
+        "recording", type=path_text, metavar="RUN.mcap", help="the recording to recover"
+    )
+    parser.add_argument(
+        "-o", "--output", type=path_text, default=None, metavar="OUT.mcap",
         help="the file to write (default: RUN-recovered.mcap beside RUN.mcap; must not exist)",
     )  # fmt: skip
     parser.set_defaults(run=run)

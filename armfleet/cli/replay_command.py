@@ -10,6 +10,7 @@ from types import FrameType
 
 from armfleet.cli.number_arguments import port, replay_speed
 from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.path_arguments import path_text
 from armfleet.recording import Recording, ReplayPlayer, export_html, open_recording
 from armfleet.recording.replay import start_replay_viewer
 
@@ -25,9 +26,9 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         "MeshCat viewer: the recorded arms at their recorded joint positions and times, "
         "nothing simulated. With --html, write the standalone HTML replay instead.",
     )
-    parser.add_argument("recording", metavar="RUN.mcap", help="the recording")
+    parser.add_argument("recording", type=path_text, metavar="RUN.mcap", help="the recording")
     parser.add_argument(
-        "--html", default=None, metavar="OUT.html",
+        "--html", type=path_text, default=None, metavar="OUT.html",
         help="write the standalone HTML replay (plays from file://) and exit",
     )  # fmt: skip
     parser.add_argument(

@@ -6,6 +6,7 @@ import argparse
 
 from armfleet.cli.number_arguments import port, run_duration
 from armfleet.cli.parser import OneLineParser
+from armfleet.cli.path_arguments import path_text
 from armfleet.cli.record_option import HELP, METAVAR, check_record_path
 
 
@@ -28,7 +29,7 @@ def add_run_arguments(parser: OneLineParser) -> None:
         "--viewer-port", type=port, default=None, metavar="PORT",
         help="web port of the viewer (default: a free port)",
     )  # fmt: skip
-    parser.add_argument("--record", metavar=METAVAR, default=None, help=HELP)
+    parser.add_argument("--record", type=path_text, metavar=METAVAR, default=None, help=HELP)
     parser.add_argument("--quiet", action="store_true", help="no progress or status lines")
 
 

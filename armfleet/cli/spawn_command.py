@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import argparse
 import re
-from collections.abc import Sequence
 
 from armfleet.cli.api_options import add_connect_arguments
 from armfleet.cli.fleet_runner import run_fleet
 from armfleet.cli.join_world import add_to_world, running_world
+from armfleet.cli.misplaced_values import ValueTest
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.description import ModelLibrary
@@ -44,45 +44,22 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )  # fmt: skip
     add_connect_arguments(parser)
     parser.set_defaults(run=run)
-    parser.explain = explain_missing_names
+    # Names typed after --at or --model end up there: a value that is not a pose (has an
+    # arm name's form) or not a model was meant as a name.
+    parser.value_tests["--at"] = ValueTest("position", lambda text: not _is_name(text))
+    parser.value_tests["--model"] = ValueTest("model", lambda text: text in ModelLibrary().names)
 
 
-def swallowed_names(at: Sequence[str]) -> list[str]:
-    """The values given to ``--at`` that are arm names, not poses: ``--at`` takes every
-    value up to the next option, so names typed after it end up there."""
-    return [text for text in at if re.match(ARM_NAME_PATTERN, text)]
-
-
-def _swallowed(names: Sequence[str], at: Sequence[str]) -> UsageError | None:
-    taken = swallowed_names(at)
-    if not taken:
-        return None
-    poses = [text for text in at if text not in taken]
-    what = "a position" if len(taken) == 1 else "positions"
-    example = " ".join(["armfleet spawn", *names, *taken, "--at", *(poses or ["0,0"])])
-    return UsageError(
-        f"--at took {', '.join(repr(t) for t in taken)} as {what}; put the arm names before "
-        f"--at, e.g. '{example}'"
-    )
-
-
-def explain_missing_names(message: str, given: Sequence[str]) -> str | None:
-    """When argparse misses NAME because ``--at`` took the names, say so."""
-    if "required" not in message or "NAME" not in message or "--at" not in given:
-        return None
-    start = given.index("--at") + 1
-    at = list(given[start:])
-    end = next((i for i, text in enumerate(at) if text.startswith("--")), len(at))
-    error = _swallowed([], at[:end])
-    return None if error is None else str(error)
+def _is_name(text: str) -> bool:
+    return re.match(ARM_NAME_PATTERN, text) is not None
 
 
 def spec_from_arguments(args: argparse.Namespace, models: ModelLibrary) -> FleetSpec:
     """The launch spec the arguments describe; raise UsageError or ArmfleetError."""
     names: list[str] = args.names
-    swallowed = _swallowed(names, args.at)
-    if swallowed is not None:
-        raise swallowed
+    counts_agree = len(args.at) == len(names) and len(args.model) in (1, len(names))
+    if not counts_agree and args.misplaced_values is not None:
+        raise UsageError(str(args.misplaced_values))
     if len(args.at) != len(names):
         raise UsageError(
             f"got {len(names)} names but {len(args.at)} --at poses; give one --at "

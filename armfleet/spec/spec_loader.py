@@ -57,16 +57,22 @@ MAX_GRID_ARMS = 400
 def find_spec(name_or_path: str) -> Path:
     """A spec file by path, or by name among the shipped ``launch_specs/``."""
     path = Path(name_or_path)
-    if path.is_file():
-        return path
     shipped = data_dir("launch_specs")
-    for candidate in (shipped / name_or_path, shipped / f"{name_or_path}.yaml"):
-        if candidate.is_file():
-            return candidate
     names = sorted(p.stem for p in shipped.glob("*.yaml"))
-    raise SpecError(
-        name_or_path, 0, "", f"no such spec file; shipped specs: {', '.join(names) or '(none)'}"
-    )
+    listed = ", ".join(names) or "(none)"
+    try:
+        if path.is_file():
+            return path
+        for candidate in (shipped / name_or_path, shipped / f"{name_or_path}.yaml"):
+            if candidate.is_file():
+                return candidate
+        is_folder = path.is_dir()
+    except OSError as exc:  # e.g. a name too long for the file system
+        raise SpecError(name_or_path, 0, "", f"cannot be read ({exc.strerror})") from None
+    if is_folder:
+        problem = f"is a folder; give a spec file (.yaml) or a shipped spec's name: {listed}"
+        raise SpecError(name_or_path, 0, "", problem)
+    raise SpecError(name_or_path, 0, "", f"no such spec file; shipped specs: {listed}")
 
 
 def load_spec(name_or_path: str | Path) -> FleetSpec:
