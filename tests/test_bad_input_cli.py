@@ -17,7 +17,7 @@ import re
 import subprocess
 import time
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from datetime import datetime
 from pathlib import Path
 from typing import cast
@@ -29,6 +29,10 @@ import armfleet
 from armfleet.cli.status_line import status_line
 from armfleet.errors import InvalidNumber
 from armfleet.messages import ArmMode
+from armfleet.recording import export_html, open_recording, plot_recording, recover
+from armfleet.spec import load_spec
+from armfleet.user_paths import EmptyPath
+from tests.conftest import RecordedRun
 from tests.remote_world import ARMFLEET, WorldProcess, cli, runtime_env, wait_until
 
 HOME = "0,-0.785,0,-2.356,0,1.571,0.785"
@@ -489,6 +493,63 @@ def test_the_world_refuses_what_the_command_line_refuses(world: WorldProcess) ->
             client.step(10**12)
     with pytest.raises(InvalidNumber, match=re.escape("timeout = 1e+308 is invalid")):
         armfleet.connect(world.address, timeout=1e308)
+
+
+def _record_to_empty_path(run: RecordedRun) -> None:
+    with armfleet.World() as world:
+        armfleet.Recorder(world, "")
+
+
+@pytest.mark.parametrize(
+    ("call", "expected"),
+    [
+        pytest.param(
+            lambda run: open_recording(""),
+            "recording: the path is empty; give a file path",
+            id="open_recording('') -> EmptyPath (not '. is not an MCAP recording')",
+        ),
+        pytest.param(
+            lambda run: recover(""),
+            "recording: the path is empty",
+            id="recover('') -> EmptyPath (not ValueError: '.' has an empty name)",
+        ),
+        pytest.param(
+            lambda run: recover(run.path, " "),
+            "output: the path is blank (' ')",
+            id="recover(output=' ') -> EmptyPath",
+        ),
+        pytest.param(
+            lambda run: load_spec(""),
+            "launch spec: the path is empty",
+            id="load_spec('') -> EmptyPath",
+        ),
+        pytest.param(
+            lambda run: plot_recording(open_recording(run.path), output=""),
+            "output: the path is empty",
+            id="plot_recording(output='') -> EmptyPath (wrote the figures into the current folder)",
+        ),
+        pytest.param(
+            lambda run: export_html(open_recording(run.path), ""),
+            "HTML replay: the path is empty",
+            id="export_html('') -> EmptyPath",
+        ),
+        pytest.param(
+            _record_to_empty_path, "recording: the path is empty", id="Recorder('') -> EmptyPath"
+        ),
+    ],
+)
+def test_the_python_api_refuses_an_empty_path_as_the_command_line_does(
+    recorded_run: RecordedRun,
+    call: Callable[[RecordedRun], object],
+    expected: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """One rule (armfleet.user_paths) for every path given as text; nothing is written."""
+    monkeypatch.chdir(tmp_path)  # whatever is written to '.' would land here
+    with pytest.raises(EmptyPath, match=re.escape(expected)):
+        call(recorded_run)
+    assert list(tmp_path.iterdir()) == []
 
 
 # -- item 18: a spawn that joins says which world ----------------------------------------------

@@ -10,6 +10,7 @@ from pathlib import Path
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.reader import Recording
 from armfleet.recording.tracking_data import TrackingData, plottable_arms, tracking_data
+from armfleet.user_paths import given_path
 
 #: File types ``plot`` writes.
 FORMATS = (".png", ".svg", ".pdf")
@@ -42,7 +43,7 @@ def output_paths(
     """
     if output is None:
         return {arm: recording.with_name(f"{recording.stem}_{arm}.png") for arm in arms}
-    target = Path(output)
+    target = given_path(output, "output")
     if target.is_dir():
         return {arm: target / f"{recording.stem}_{arm}.png" for arm in arms}
     if target.suffix.lower() not in FORMATS:

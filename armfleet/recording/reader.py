@@ -40,6 +40,7 @@ from armfleet.recording.errors import (
 )
 from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan, ScanResult
 from armfleet.recording.recorder import SPEC_ATTACHMENT
+from armfleet.user_paths import given_path
 
 NS_PER_S = 1e9
 CHUNK_OPCODE = bytes([Opcode.CHUNK])
@@ -111,7 +112,7 @@ class Recording:
     """An MCAP recording, opened for reading (see :func:`open_recording`)."""
 
     def __init__(self, path: str | Path) -> None:
-        self.path = Path(path)
+        self.path = given_path(path, "recording")
         _check_magic(self.path)
         self._summary = self._read_summary()
         #: Whether the file ends with its summary (False: the writer died; read up to the

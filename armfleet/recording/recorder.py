@@ -50,6 +50,7 @@ from armfleet.recording.encode import MessageEncoder, StringEncoder, encoder_for
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.mcap_sink import CHUNK_BYTES, McapSink
 from armfleet.recording.spec_snapshot import spec_text
+from armfleet.user_paths import given_path
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
@@ -104,7 +105,7 @@ class Recorder:
     ) -> None:
         if not isinstance(path, str | os.PathLike):
             raise RecordingError(f"recording {path!r}: name an MCAP file ending in {SUFFIX}")
-        self._path = Path(path)
+        self._path = given_path(path, "recording")
         if self._path.suffix.lower() != SUFFIX:
             raise RecordingError(f"recording {self._path}: name an MCAP file ending in {SUFFIX}")
         self._world = world

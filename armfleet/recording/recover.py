@@ -38,6 +38,7 @@ from armfleet.recording.errors import (
 )
 from armfleet.recording.mcap_sink import CHUNK_BYTES
 from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan
+from armfleet.user_paths import given_path
 
 
 @dataclass(frozen=True)
@@ -106,8 +107,8 @@ def recover(source: str | Path, output: str | Path | None = None) -> Recovery:
             Header (nothing to recover).
         RecordingError: ``output`` is unusable, or cannot be written.
     """
-    source = Path(source)
-    target = default_output(source) if output is None else Path(output)
+    source = given_path(source, "recording")
+    target = default_output(source) if output is None else given_path(output, "output")
     _check_paths(source, target)
     folder = target.parent
     handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=folder)

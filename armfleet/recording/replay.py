@@ -33,6 +33,7 @@ from armfleet.recording.replay_stream import (
     TargetSent,
     replay_events,
 )
+from armfleet.user_paths import given_path
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
@@ -193,7 +194,7 @@ def export_html(recording: Recording, path: str | Path, models: ModelLibrary | N
     """
     from armfleet.viewer import ViewerError
 
-    target = Path(path)
+    target = given_path(path, "HTML replay")
     viewer = start_replay_viewer()
     try:
         ReplayPlayer(recording, viewer, models=models).play(speed=None)

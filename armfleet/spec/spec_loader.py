@@ -44,6 +44,7 @@ from armfleet.spec.scene_rehearsal import LocatedRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.time_step import MAX_DT_S, MIN_DT_S
+from armfleet.user_paths import given_path
 
 TOP_KEYS = ("world", "arms", "grid", "objects")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
@@ -56,7 +57,7 @@ MAX_GRID_ARMS = 400
 
 def find_spec(name_or_path: str) -> Path:
     """A spec file by path, or by name among the shipped ``launch_specs/``."""
-    path = Path(name_or_path)
+    path = given_path(name_or_path, "launch spec")
     shipped = data_dir("launch_specs")
     names = sorted(p.stem for p in shipped.glob("*.yaml"))
     listed = ", ".join(names) or "(none)"
