@@ -7,8 +7,12 @@ carries the descriptor it came on (``SRCFD``). Together they name the peers
 whose connection closed: a process that exited or was killed, a closed client,
 or one the heartbeat found dead. The server then cancels those peers' requests.
 
-Monitor events are read before requests (see :meth:`PeerWatch.departed`), so a
-descriptor reused by a new connection is never taken for the old one's.
+A connection's events come in order: its old user's ``DISCONNECTED`` is emitted
+before the descriptor is closed, so before it can be reused, so before a new
+connection on it is accepted and sends anything. The server therefore reads a
+batch of requests, then the monitor's events (:meth:`PeerWatch.departed`), then
+notes who sent each request (:meth:`PeerWatch.note`): a descriptor reused by a
+new connection is never taken for the old one's.
 """
 
 from __future__ import annotations
@@ -34,9 +38,7 @@ class PeerWatch:
 
     def __init__(self, socket: zmq.Socket[bytes]) -> None:
         self._socket = socket
-        self.monitor: zmq.Socket[bytes] = socket.get_monitor_socket(
-            zmq.EVENT_ACCEPTED | zmq.EVENT_DISCONNECTED
-        )
+        self.monitor: zmq.Socket[bytes] = socket.get_monitor_socket(zmq.EVENT_DISCONNECTED)
         self._peers_by_fd: dict[int, set[bytes]] = {}
         self._departed: set[bytes] = set()
         self._departed_order: deque[bytes] = deque()
@@ -61,12 +63,9 @@ class PeerWatch:
                 event = recv_monitor_message(self.monitor, zmq.NOBLOCK)
             except zmq.Again:
                 return gone
-            fd = int(event["value"])
-            peers = self._peers_by_fd.pop(fd, set())  # ACCEPTED: a new connection, none yet
-            if event["event"] == zmq.EVENT_DISCONNECTED:
-                for peer in peers:
-                    self._remember(peer)
-                    gone.append(peer)
+            for peer in self._peers_by_fd.pop(int(event["value"]), set()):
+                self._remember(peer)
+                gone.append(peer)
 
     def _remember(self, peer: bytes) -> None:
         self._departed.add(peer)

@@ -192,7 +192,7 @@ class WorldServer:
                     timeout = min(timeout, STREAM_FLUSH_PERIOD_S)
                 poller.poll(max(0, round(timeout * 1000)))
                 self._wakeup.clear()
-                self._forget(self._peers.departed())  # before reading: see PeerWatch
+                self._forget(self._peers.departed())
                 self._receive()
                 self._pending.answer_completed()
                 self._pending.expire()
@@ -212,11 +212,18 @@ class WorldServer:
             self._context.term()
 
     def _receive(self) -> None:
+        batch = []
         for _ in range(READ_BURST):
             try:
-                frames = self._socket.recv_multipart(zmq.NOBLOCK, copy=False)
+                batch.append(self._socket.recv_multipart(zmq.NOBLOCK, copy=False))
             except zmq.Again:
-                return
+                break
+        if not batch:
+            return
+        # The connection events up to these requests, before noting who sent them (see
+        # PeerWatch: a descriptor closed and reused meanwhile is not taken for the new one).
+        self._forget(self._peers.departed())
+        for frames in batch:
             peer = frames[0].bytes
             if self._peers.has_departed(peer):
                 continue  # read after its client left: nobody to answer, nothing to do
