@@ -283,7 +283,12 @@ BAD = [
         ["argument --record: the path is empty"],
         id="spawn --record '' -> path is empty",
     ),
-    # -- audit: repeated options, 100 kB values ------------------------------------------------
+    # -- audit: repeated options, arguments left over, 100 kB values ---------------------------
+    pytest.param(
+        ["move", "bob", "carl", "--joints", *AWAY],
+        ["'armfleet move' does not take the argument 'carl' (see 'armfleet move --help')"],
+        id="an argument too many -> named with its command's help (not 'armfleet --help')",
+    ),
     pytest.param(
         ["spawn", "carl", "--at", "0,1.5", "--at", "1,1.5"],
         ["--at is given twice; give it once (all its values after one)"],

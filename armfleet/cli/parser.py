@@ -82,6 +82,23 @@ class OneLineParser(argparse.ArgumentParser):
             parsed.misplaced_values = misplaced
         return parsed, extras
 
+    def parse_args(  # type: ignore[override]  # same behaviour, one message for extras
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        """As argparse's, but arguments left over are named with the (sub)command that
+        did not take them, and its help (argparse pointed to the top-level help)."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            prog = self.prog
+            for action in self._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    command = action.choices.get(getattr(parsed, action.dest, None) or "")
+                    prog = command.prog if command is not None else prog
+            listed = " ".join(repr(extra) for extra in extras)
+            what = "argument" if len(extras) == 1 else "arguments"
+            raise UsageError(f"'{prog}' does not take the {what} {listed} (see '{prog} --help')")
+        return parsed
+
     def error(self, message: str) -> NoReturn:
         if missing_positionals(self, self._given):
             misplaced = find_misplaced(self, self._given, self.value_tests, self.prog)
