@@ -72,6 +72,18 @@ def fifo_parameters(world: armfleet.World, bob: armfleet.Arm) -> object:
     return world.spawn("k", at=(0, 3), parameter_files={"position_controller": "gains.yaml"})
 
 
+def fifo_recording(world: armfleet.World, bob: armfleet.Arm) -> object:
+    """A FIFO named like a recording. With nobody reading it, opening it for writing
+    blocked for ever; a reader is kept open here so that, were it accepted again, the
+    case fails instead of hanging."""
+    os.mkfifo("pipe.mcap")
+    reader = os.open("pipe.mcap", os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        return world.record("pipe.mcap")
+    finally:
+        os.close(reader)
+
+
 REFUSED = [
     case(
         lambda w, b: w.run(0.01, on_step=5),
@@ -178,6 +190,11 @@ REFUSED = [
         RecordingError, ".",
         id="record() to a directory -> RecordingError, nothing recorded",
     ),
+    case(
+        fifo_recording,
+        RecordingError, "pipe.mcap: it is not a regular file",
+        id="record() to a FIFO -> not a regular file (was accepted, or hung with no reader)",
+    ),
 ]  # fmt: skip
 
 
@@ -210,6 +227,27 @@ def test_gripper_commands_on_a_model_without_one(world: armfleet.World) -> None:
             command()
     world.run(HOLD_CHECK_S)
     assert np.abs(u.positions - held).max() < HOLD_DRIFT_RAD
+
+
+def test_a_second_recorder_cannot_write_into_a_file_being_recorded(world: armfleet.World) -> None:
+    """Was: both accepted, records interleaved, the file read back as DamagedRecording."""
+    bob = world.spawn("bob")
+    first = world.record("run.mcap")
+    world.run(0.1)
+    with pytest.raises(RecordingError, match="another recorder is writing it") as caught:
+        world.record("run.mcap")
+    assert "\n" not in str(caught.value)
+    bob.move_to(bob.positions + 0.1)
+    world.run(0.5)
+    first.stop()
+    # The first recording is whole: every message it wrote reads back.
+    read_back = sum(1 for _ in armfleet.open_recording("run.mcap").messages())
+    assert read_back == first.message_count > 0
+    # Once stopped, the file is free again.
+    again = world.record("run.mcap")
+    world.run(0.05)
+    again.stop()
+    assert sum(1 for _ in armfleet.open_recording("run.mcap").messages()) == again.message_count
 
 
 # -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------

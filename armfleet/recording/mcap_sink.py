@@ -14,7 +14,9 @@ so an interrupt never leaves a half-written record behind.
 
 from __future__ import annotations
 
+import fcntl
 import io
+import os
 import threading
 from pathlib import Path
 from typing import Any
@@ -30,6 +32,34 @@ from armfleet.recording.schemas import MessageSchema
 CHUNK_BYTES = 1024 * 1024
 #: Messages batched before they enter the writer.
 BATCH_MESSAGES = 512
+
+
+def _claim(path: Path) -> io.FileIO:
+    """``path`` opened empty for writing by this sink alone.
+
+    An exclusive lock (released when the file closes) keeps a second recorder, in
+    this process or another, from writing into the same file at the same time: two
+    writers interleaved their records and the file read back as garbage. The file
+    is emptied only once the lock is held, so a refused recorder leaves the running
+    one's file intact. A FIFO or a device is no place for a recording either (opening
+    a FIFO nobody reads blocked for ever).
+    """
+    if path.exists() and not path.is_file():
+        raise RecordingError(f"cannot write the recording {path}: it is not a regular file")
+    try:  # not truncated yet: O_TRUNC before the lock would empty a running recorder's file
+        raw = io.FileIO(os.open(path, os.O_WRONLY | os.O_CREAT, 0o666), "w")
+    except OSError as exc:
+        raise RecordingError(f"cannot write the recording {path}: {exc.strerror}") from None
+    try:
+        fcntl.flock(raw.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        raw.close()
+        raise RecordingError(
+            f"cannot write the recording {path}: another recorder is writing it; "
+            f"stop that one or choose another file"
+        ) from None
+    os.ftruncate(raw.fileno(), 0)  # position is 0: nothing read or written yet
+    return raw
 
 
 class _FlushingFile(io.BufferedWriter):
@@ -57,11 +87,7 @@ class McapSink:
 
     def __init__(self, path: Path, library: str, chunk_bytes: int = CHUNK_BYTES) -> None:
         self.path = path
-        try:
-            raw = io.FileIO(path, "w")
-        except OSError as exc:
-            raise RecordingError(f"cannot write the recording {path}: {exc.strerror}") from None
-        self._file = _FlushingFile(raw)
+        self._file = _FlushingFile(_claim(path))
         self._lock = threading.Lock()
         self._pending: list[tuple[int, int, bytes]] = []
         self._schemas: dict[str, int] = {}
