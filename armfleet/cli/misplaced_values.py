@@ -116,24 +116,7 @@ def find_misplaced(
             ``type=`` or ``choices`` don't say (without one, an option accepts anything).
         prog: the command, for the example.
     """
-    taken: dict[argparse.Action, list[int]] = {}
-    current: argparse.Action | None = None
-    left = 0  # values still owed to a fixed-count option
-    for index, text in enumerate(given):
-        if text == "--":
-            break
-        if is_option(parser, text):
-            action = option_action(parser, text)
-            inline = "=" in text
-            current = action if action is not None and action.nargs in MANY else None
-            current = None if inline else current
-            left = _fixed_count(action) if action is not None and not inline else 0
-            if current is not None:
-                taken.setdefault(current, [])
-        elif left:
-            left -= 1
-        elif current is not None:
-            taken[current].append(index)
+    taken, _ = _split(parser, given)
     for action, indices in taken.items():
         test = tests.get(action.option_strings[0]) or _default_test(action)
         if test is None:
@@ -160,23 +143,38 @@ def missing_positionals(parser: argparse.ArgumentParser, given: Sequence[str]) -
         for a in parser._actions
         if _is_positional(a)
     )
-    free = 0
-    current_many = False
-    left = 0
+    _, free = _split(parser, given)
+    return len(free) < need
+
+
+def _split(
+    parser: argparse.ArgumentParser, given: Sequence[str]
+) -> tuple[dict[argparse.Action, list[int]], list[int]]:
+    """Where argparse puts each value of ``given``: the indices each option of several
+    values takes, and those left for the positional arguments."""
+    taken: dict[argparse.Action, list[int]] = {}
+    free: list[int] = []
+    current: argparse.Action | None = None
+    left = 0  # values still owed to an option of a fixed count
     for index, text in enumerate(given):
         if text == "--":
-            free += len(given) - index - 1
+            free.extend(range(index + 1, len(given)))
             break
         if is_option(parser, text):
             action = option_action(parser, text)
-            inline = "=" in text
-            current_many = action is not None and action.nargs in MANY and not inline
+            inline = "=" in text  # --at=0,0: the value is in the option
+            many = action is not None and action.nargs in MANY and not inline
+            current = action if many else None
             left = _fixed_count(action) if action is not None and not inline else 0
+            if current is not None:
+                taken.setdefault(current, [])
         elif left:
             left -= 1
-        elif not current_many:
-            free += 1
-    return free < need
+        elif current is not None:
+            taken[current].append(index)
+        else:
+            free.append(index)
+    return taken, free
 
 
 def _is_positional(action: argparse.Action) -> bool:
