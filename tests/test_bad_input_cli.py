@@ -430,12 +430,18 @@ SECONDS_RUN = "seconds in [0, 1000000]"
 USER_PORT = "a TCP port, an integer in 1..65535"
 API_PORT = "a TCP port (0: a free one), an integer in 0..65535"
 
+METRES = "metres in [-1000, 1000]"
+DEGREES = "degrees in [-360, 360]"
+
 HELP_RANGES = {
     "spawn": {"--duration S": SECONDS_RUN, "--viewer-port PORT": USER_PORT,
-              "--api-port PORT": API_PORT, "--timeout S": SECONDS_ANSWER},
+              "--api-port PORT": API_PORT, "--timeout S": SECONDS_ANSWER,
+              "--at X,Y[,Z[,YAW_DEG]] [X,Y[,Z[,YAW_DEG]] ...]":
+                  f"X Y Z {METRES}, YAW_DEG {DEGREES}"},
     "launch": {"--duration S": SECONDS_RUN, "--viewer-port PORT": USER_PORT,
                "--api-port PORT": API_PORT},
-    "move": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
+    "move": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER,
+             "--pose V [V ...]": f"X Y Z {METRES}, angles {DEGREES}"},
     "move-together": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
     "grip": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
     "step": {"N": "steps, an integer in 1..100000", "--timeout S": SECONDS_ANSWER},
@@ -443,6 +449,9 @@ HELP_RANGES = {
     "info": {"--timeout S": SECONDS_ANSWER},
     "replay": {"--speed X": "a factor (times real time) in [0.001, 1000]",
                "--viewer-port PORT": USER_PORT},
+    "add-object": {"--size M [M ...]": "metres, each in (0, 100]",
+                   "--mass KG": "kg in [0, 10000]", "--at X Y Z": METRES,
+                   "--yaw DEG": DEGREES, "--timeout S": SECONDS_ANSWER},
 }  # fmt: skip
 
 

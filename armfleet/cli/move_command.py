@@ -11,7 +11,7 @@ from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.messages import FloatArray
-from armfleet.number_ranges import ANGLE_DEG
+from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.objects.object_spec import pose_matrix
 from armfleet.remote import Client
 from armfleet.remote.remote_arm import WAIT_TIMEOUT_S, RemoteArm
@@ -54,6 +54,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help=f"longest wait for the motion with --wait [s] (default {WAIT_TIMEOUT_S:g})",
     )  # fmt: skip
     parser.set_defaults(run=run)
+    parser.help_ranges["pose"] = f"X Y Z {WORLD_COORDINATE_M.valid}, angles {ANGLE_DEG.valid}"
 
 
 def run(args: argparse.Namespace) -> int:

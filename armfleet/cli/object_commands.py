@@ -6,7 +6,8 @@ import argparse
 
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.parser import OneLineParser
-from armfleet.objects.object_spec import DEFAULT_MASS_KG, SIZE_MEANING
+from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
+from armfleet.objects.object_spec import DEFAULT_MASS_KG, MAX_MASS_KG, MAX_SIZE_M, SIZE_MEANING
 from armfleet.remote.object_services import REMOTE_SHAPES
 from armfleet.remote.world_info import ObjectInfo
 
@@ -36,6 +37,12 @@ def add_parsers(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help="rotation about the world's z [deg] (default 0)",
     )  # fmt: skip
     add.set_defaults(run=add_object)
+    add.help_ranges.update(
+        size=f"metres, each in (0, {MAX_SIZE_M:g}]",
+        mass=f"kg in [0, {MAX_MASS_KG:g}]",
+        at=WORLD_COORDINATE_M.valid,
+        yaw=ANGLE_DEG.valid,
+    )
     remove = add_remote_command(
         subparsers, "remove-object", "take scene objects out of the running world"
     )

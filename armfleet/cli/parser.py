@@ -31,13 +31,21 @@ _NEGATIVE_VALUE = re.compile(
 
 
 class RangeHelpFormatter(argparse.HelpFormatter):
-    """Help that ends each numeric option's line with its valid range (from the range its
-    :class:`NumberArgument` checks, so the two cannot drift)."""
+    """Help that ends each numeric option's line with its valid range: the range its
+    :class:`NumberArgument` checks, or the one the parser's ``help_ranges`` gives for a
+    number the world checks (so neither can drift from the check)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        #: Valid ranges of numbers not typed by a NumberArgument, by argument ``dest``.
+        self.ranges: dict[str, str] = {}
 
     def _get_help_string(self, action: argparse.Action) -> str | None:
         text = super()._get_help_string(action)
         if isinstance(action.type, NumberArgument):
             return f"{text or ''}; valid: {action.type.valid.valid}"
+        if action.dest in self.ranges:
+            return f"{text or ''}; valid: {self.ranges[action.dest]}"
         return text
 
 
@@ -62,6 +70,10 @@ class OneLineParser(argparse.ArgumentParser):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", RangeHelpFormatter)
+        #: The valid range of a number the world checks rather than the parser, by the
+        #: argument's ``dest``, for the help (built from the range that checks it); set
+        #: first, as argparse formats its own --help while it is built.
+        self.help_ranges: dict[str, str] = {}
         super().__init__(*args, **kwargs)
         # argparse's documented behaviour hinges on this matcher (no option of ours
         # looks like a negative number, so such values are always arguments).
@@ -105,6 +117,12 @@ class OneLineParser(argparse.ArgumentParser):
             if misplaced is not None:
                 message = str(misplaced)
         raise UsageError(f"{message} (see '{self.prog} --help')")
+
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        formatter = super()._get_formatter()
+        if isinstance(formatter, RangeHelpFormatter):
+            formatter.ranges = self.help_ranges
+        return formatter
 
     def _check_options(self) -> None:
         """Refuse an option this (sub)command does not have, before argparse reports a

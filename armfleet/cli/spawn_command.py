@@ -15,6 +15,7 @@ from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.description import ModelLibrary
 from armfleet.errors import UnknownModel
 from armfleet.names import ARM_NAME_PATTERN, check_arm_name
+from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.spawn_pose import AT_SYNTAX, SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
 from armfleet.spec.scene_rehearsal import rehearse
@@ -44,6 +45,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )  # fmt: skip
     add_connect_arguments(parser)
     parser.set_defaults(run=run)
+    parser.help_ranges["at"] = f"X Y Z {WORLD_COORDINATE_M.valid}, YAW_DEG {ANGLE_DEG.valid}"
     # Names typed after --at or --model end up there: a value that is not a pose (has an
     # arm name's form) or not a model was meant as a name.
     parser.value_tests["--at"] = ValueTest("position", lambda text: not _is_name(text))
