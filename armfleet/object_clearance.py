@@ -57,6 +57,11 @@ def object_offences(
     for other in neighbours:
         if other.body_id == body_id:
             continue
+        if static and other.fixed_links >= other.links.keys():
+            # Neither ever moves, so nothing is asked of PyBullet: its getClosestPoints
+            # crashed the process (SIGSEGV) for some dense static meshes on the floor
+            # (a 179k-triangle height field), and the answer was thrown away anyway.
+            continue
         allowed = CLEARANCE_M if other.kind is BodyKind.ARM else -RESTING_OVERLAP_M
         for _, link, distance in closest_pairs(client, body_id, other.body_id, CLEARANCE_M):
             if static and link in other.fixed_links:

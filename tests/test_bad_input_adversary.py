@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import math
 import os
+import subprocess
+import sys
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -248,6 +250,44 @@ def test_a_second_recorder_cannot_write_into_a_file_being_recorded(world: armfle
     world.run(0.05)
     again.stop()
     assert sum(1 for _ in armfleet.open_recording("run.mcap").messages()) == again.message_count
+
+
+def height_field(path: Path, n: int) -> None:
+    """An n x n-vertex OBJ height field 0.2 m square, z = 10 mm sin(40 x) cos(40 y)."""
+    xs = np.linspace(0.0, 0.2, n)
+    lines = [
+        f"v {x:.6f} {y:.6f} {0.01 * math.sin(40 * x) * math.cos(40 * y):.6f}"
+        for x in xs
+        for y in xs
+    ]
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a = i * n + j + 1
+            lines += [f"f {a} {a + 1} {a + n + 1}", f"f {a} {a + n + 1} {a + n}"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_a_dense_static_mesh_on_the_floor_does_not_kill_the_process(tmp_path: Path) -> None:
+    """Was: SIGSEGV inside PyBullet's getClosestPoints (mesh vs floor) during add_object's
+    clearance check, taking every arm of the world with it. A static object and the floor
+    never move, so that pair is no longer asked about. Run in a child process so that a
+    crash is this test's failure, not the end of the test session."""
+    mesh = tmp_path / "terrain.obj"
+    height_field(mesh, 230)  # 104,882 triangles: this grid crashed 6 times out of 6
+    script = (
+        "import armfleet\n"
+        "with armfleet.World() as world:\n"
+        "    bob = world.spawn('bob')\n"
+        f"    terrain = world.add_object('terrain', 'mesh', mesh={str(mesh)!r}, mass=0,"
+        " at=(2, 2, 0))\n"
+        "    world.run(0.1)\n"
+        "    print(terrain.is_static, list(world.objects), bob.position_controller.is_holding)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=tmp_path
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split()[-3:] == ["True", "['terrain']", "True"]
 
 
 # -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------
