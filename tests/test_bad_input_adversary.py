@@ -86,6 +86,23 @@ def fifo_recording(world: armfleet.World, bob: armfleet.Arm) -> object:
         os.close(reader)
 
 
+def fed_fifo(name: str) -> int:
+    """A FIFO ``name`` holding a few bytes, kept open for both ends (returned) so that
+    neither opening nor reading it blocks, even on code that reads it."""
+    os.mkfifo(name)
+    end = os.open(name, os.O_RDWR)
+    os.write(end, b"not mcap")
+    return end
+
+
+def fifo_replay(world: armfleet.World, bob: armfleet.Arm) -> object:
+    end = fed_fifo("feed.mcap")
+    try:
+        return armfleet.open_recording("feed.mcap")
+    finally:
+        os.close(end)
+
+
 REFUSED = [
     case(
         lambda w, b: w.run(0.01, on_step=5),
@@ -188,6 +205,11 @@ REFUSED = [
         id="open_recording of a text file -> RecordingError, not MCAP",
     ),
     case(
+        fifo_replay,
+        NotARecording, "a pipe or a device, not a regular file",
+        id="open_recording of a FIFO -> not a regular file (with no writer it hung)",
+    ),
+    case(
         lambda w, b: w.record("."),
         RecordingError, ".",
         id="record() to a directory -> RecordingError, nothing recorded",
@@ -288,6 +310,24 @@ def test_a_dense_static_mesh_on_the_floor_does_not_kill_the_process(tmp_path: Pa
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.split()[-3:] == ["True", "['terrain']", "True"]
+
+
+def test_cli_replay_of_a_fifo_is_one_line_exit_2(tmp_path: Path) -> None:
+    """Was: 'armfleet replay <fifo>' blocked for ever opening it (with a writer: read it)."""
+    end = fed_fifo(str(tmp_path / "feed"))
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "armfleet.cli.main", "replay", str(tmp_path / "feed")],
+            capture_output=True,
+            text=True,
+            env=os.environ | {"XDG_RUNTIME_DIR": str(tmp_path)},
+        )
+    finally:
+        os.close(end)
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr
+    assert "is not an MCAP recording (it is a pipe or a device, not a regular file)" in lines[0]
 
 
 # -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------

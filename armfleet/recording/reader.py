@@ -283,6 +283,9 @@ class Recording:
 
 
 def _check_magic(path: Path) -> None:
+    if path.exists() and not path.is_file() and not path.is_dir():
+        # Opening a FIFO nobody writes to waits for ever; a device is no recording either.
+        raise NotARecording(path, "it is a pipe or a device, not a regular file")
     try:
         with path.open("rb") as stream:
             head = stream.read(len(MCAP_MAGIC))
