@@ -50,11 +50,12 @@ class TfTree:
         if frame == WORLD_FRAME:
             return np.eye(4)
         objects = self._objects() if self._objects is not None else {}
-        if frame in objects:
+        text = isinstance(frame, str)  # a list is no frame name (nor a dictionary key)
+        if text and frame in objects:
             return objects[frame].pose
         arms = self._arms()
         for kinematics, positions in arms.values():
-            if kinematics.has_frame(frame):
+            if text and kinematics.has_frame(frame):
                 kinematics.update(positions)
                 return kinematics.world_pose(frame)
         names = ", ".join(sorted(arms)) or "none yet"

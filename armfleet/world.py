@@ -208,7 +208,7 @@ class World:
         return self._requests.drain()
 
     def arm(self, name: str) -> Arm:
-        if name not in self._arms:
+        if not isinstance(name, str) or name not in self._arms:  # a list is no name either
             raise UnknownArm(name, list(self._arms))
         return self._arms[name]
 

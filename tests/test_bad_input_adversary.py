@@ -42,6 +42,9 @@ from armfleet.errors import (
     ObjectError,
     ParameterError,
     UnknownArm,
+    UnknownFrame,
+    UnknownModel,
+    UnknownObject,
     UnreachablePose,
     WorldBusy,
 )
@@ -108,6 +111,32 @@ REFUSED = [
         lambda w, b: w.run(0.01, on_step=5),
         ArmfleetError, "on_step takes a function", "got int",
         id="run on_step=5, not a function -> refused before any step (was TypeError after one)",
+    ),
+    # -- a list or dict where a name goes: was TypeError (unhashable) from a dict lookup -
+    case(
+        lambda w, b: w.remove(["bob"]),
+        UnknownArm, "no arm named ['bob']; arms: bob",
+        id="remove(['bob']), a list for an arm name -> UnknownArm listing the arms",
+    ),
+    case(
+        lambda w, b: w.object({"name": "cube"}),
+        UnknownObject, "no object named {'name': 'cube'}",
+        id="object({...}), a dict for an object name -> UnknownObject",
+    ),
+    case(
+        lambda w, b: b.move_to_pose(np.eye(4), frame=["world"]),
+        UnknownFrame, "frame ['world'] not found", "frames are 'world'",
+        id="move_to_pose frame=['world'], a list for a frame -> UnknownFrame listing frames",
+    ),
+    case(
+        lambda w, b: w.spawn("z", model=["panda"], at=(3, 3)),
+        UnknownModel, "model ['panda'] not found; available: panda",
+        id="spawn model=['panda'], a list for a model -> UnknownModel listing the models",
+    ),
+    case(
+        lambda w, b: w.record("run.mcap", topics=[["/bob/*"]]),
+        RecordingError, "topics must be topic names or patterns (text)",
+        id="record topics=[['/bob/*']], a list in the list -> RecordingError, no file",
     ),
     case(
         lambda w, b: w.move_together({}),

@@ -104,6 +104,7 @@ class ModelLibrary:
         every time (a description that computes with its arguments).
         """
         pose = pose or SpawnPose()
+        self.path(model)  # UnknownModel for what names no model, a list included
         template = self._templates.get(model)
         if template is None:
             template = self._make_template(model)

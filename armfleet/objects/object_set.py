@@ -62,7 +62,7 @@ class ObjectSet:
 
     def get(self, name: str) -> WorldObject:
         """The object ``name``; :class:`UnknownObject` lists the others."""
-        if name not in self._objects:
+        if not isinstance(name, str) or name not in self._objects:  # a list is no name either
             raise UnknownObject(name, list(self._objects))
         return self._objects[name]
 

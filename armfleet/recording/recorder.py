@@ -123,6 +123,11 @@ class Recorder:
                 f"patterns, e.g. [{topics!r}]"
             )
         self._patterns = None if topics is None else tuple(topics)
+        if self._patterns is not None and not all(isinstance(t, str) for t in self._patterns):
+            raise RecordingError(
+                f"recording {self._path}: topics must be topic names or patterns (text), "
+                f"e.g. ['/bob/*'], got {self._patterns!r}"[:400]
+            )
         self._chunk_bytes = chunk_bytes
         self._sink: McapSink | None = None
         self._listening: list[Tap | Subscription] = []
