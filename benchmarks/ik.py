@@ -41,6 +41,7 @@ def bench_model(model: str, poses: int, seed: int) -> dict[str, Any]:
         arm = world.spawn("bob", model=model)
         tool = arm.description.tool0
         home = arm.body.position.copy()
+        joints = int(arm.kinematics.arm_indices.size)
         lower, upper = arm.joint_limits
         times_s, iterations, successes, restarted = [], [], 0, 0
         for _ in range(poses):
@@ -61,7 +62,7 @@ def bench_model(model: str, poses: int, seed: int) -> dict[str, Any]:
     ms = np.array(times_s) * 1e3
     return {
         "model": model,
-        "joints": int(arm.kinematics.arm_indices.size),
+        "joints": joints,
         "poses": poses,
         "success_rate": successes / poses,
         "restarted_fraction": restarted / poses,
