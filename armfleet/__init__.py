@@ -27,6 +27,7 @@ from armfleet.errors import (
     UnknownArm,
     UnknownObject,
     UnreachablePose,
+    WorldBusy,
     WorldClosed,
 )
 from armfleet.gripper import Gripper
@@ -97,6 +98,7 @@ __all__ = [
     "UnknownObject",
     "UnreachablePose",
     "World",
+    "WorldBusy",
     "WorldClosed",
     "WorldObject",
     "__version__",

@@ -494,7 +494,7 @@ def test_another_thread_cannot_step_or_change_a_running_world(
     start, held = world.time, bob.positions
     world.run(0.2, on_step=at_first_step)
     assert len(errors) == 1
-    assert type(errors[0]) is WorldBusy
+    assert type(errors[0]) is armfleet.WorldBusy  # exported: users catch it by name
     message = str(errors[0])
     assert "another thread" in message and "world.submit" in message and "\n" not in message
     assert world.time == pytest.approx(start + 0.2, abs=world.dt / 2)
