@@ -359,6 +359,29 @@ def test_cli_replay_of_a_fifo_is_one_line_exit_2(tmp_path: Path) -> None:
     assert "is not an MCAP recording (it is a pipe or a device, not a regular file)" in lines[0]
 
 
+@pytest.mark.parametrize(
+    "gains",
+    [
+        pytest.param({"kp_s2": 1e6, "kd_s": 0.0}, id="kp at its maximum, no damping -> bounded"),
+        pytest.param({"kp_s2": 0.0, "kd_s": 0.0}, id="no gains at all -> bounded"),
+    ],
+)
+def test_extreme_gains_in_range_hurt_no_neighbour(
+    world: armfleet.World, gains: dict[str, float]
+) -> None:
+    """Guard: gains at the edges of their ranges (what a live-API client may ask for)
+    leave that arm's state finite and its neighbour 1.2 m away holding, untouched."""
+    bob = world.spawn("bob")
+    held = bob.positions
+    evil = world.spawn("evil", at=(1.2, 0), parameters={"position_controller": gains})
+    evil.move_to(evil.positions + 0.3)
+    world.run(1.0)
+    assert np.isfinite(evil.positions).all()
+    assert bob.mode is armfleet.ArmMode.HOLDING
+    assert np.abs(bob.positions - held).max() < HOLD_DRIFT_RAD
+    assert world.safety.stops == 0
+
+
 # -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------
 Reaction = Callable[[armfleet.World], object]
 
