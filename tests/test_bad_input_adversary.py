@@ -58,6 +58,7 @@ from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
     check_rejected,
     scene,
 )
+from tests.test_gripper import BOX_SIDE_M, put_box_between_fingers
 
 #: A pose 5 m from bob's base: out of a Panda's 0.855 m reach whatever the IK does.
 FAR_POSE = np.array([[1, 0, 0, 5.0], [0, 1, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1]])
@@ -380,6 +381,59 @@ def test_extreme_gains_in_range_hurt_no_neighbour(
     assert bob.mode is armfleet.ArmMode.HOLDING
     assert np.abs(bob.positions - held).max() < HOLD_DRIFT_RAD
     assert world.safety.stops == 0
+
+
+BUS_OWNED = "armfleet/bus.py is another engineer's until ~07:30 (issue 14): reported, not fixed"
+
+
+@pytest.mark.parametrize(
+    "action",
+    [
+        pytest.param(
+            lambda w: w.bus.subscribe("/bob/joint_states", 5),
+            id="subscribe a non-callable -> TopicError now, not a dropped subscriber per step",
+            marks=pytest.mark.xfail(strict=True, reason=BUS_OWNED),
+        ),
+        pytest.param(
+            lambda w: w.bus.publish(["/bob/status"], None),
+            id="publish to a list as topic -> TopicError, not TypeError (unhashable)",
+            marks=pytest.mark.xfail(strict=True, reason=BUS_OWNED),
+        ),
+    ],
+)
+def test_bus_arguments_are_checked_where_they_are_taken(
+    world: armfleet.World, action: Reaction
+) -> None:
+    world.spawn("bob")
+    with pytest.raises(TopicError):
+        action(world)
+    world.run(0.01)
+    assert world.bus.failures == ()
+
+
+def test_removing_an_arm_whose_gripper_is_closing_on_a_box(world: armfleet.World) -> None:
+    """Guard: bob's fingers closing on a box (on a pedestal between them, as in
+    test_gripper); bob is removed mid-close. The box stays, back at rest on its pedestal
+    (within the 2 mm resting overlap of object_clearance), and the world steps on."""
+    bob = world.spawn("bob")
+    bob.gripper.open()
+    world.run(0.8)
+    put_box_between_fingers(world)
+    world.run(0.2)
+    box = world.object("box")
+    resting = box.position
+    bob.gripper.close(force=20.0)
+    for _ in range(100):  # at most 1 s of simulated time
+        if bob.gripper.width < BOX_SIDE_M + 2e-3:  # the pads 1 mm from the box's sides
+            break
+        world.run(0.01)
+    assert bob.gripper.is_moving  # still closing when its arm goes
+    world.remove("bob")
+    world.run(0.5)
+    assert list(world.arms) == [] and list(world.objects) == ["pedestal", "box"]
+    assert np.abs(box.position - resting).max() < 2e-3
+    assert np.abs(box.velocity).max() < 1e-2  # at rest [m/s]
+    assert world.bus.failures == ()
 
 
 # -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------
