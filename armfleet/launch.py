@@ -7,6 +7,7 @@ from pathlib import Path
 
 from armfleet.arm import Arm
 from armfleet.description import ModelLibrary
+from armfleet.errors import ArmfleetError
 from armfleet.flags import flag
 from armfleet.objects import ObjectSpec, WorldObject
 from armfleet.objects.object_arguments import object_arguments
@@ -63,6 +64,11 @@ def launch(
     """
     if viewer is not None:
         viewer = flag(viewer, "viewer")  # before the scene is rehearsed
+    if before_spawn is not None and not callable(before_spawn):
+        raise ArmfleetError(
+            f"launch: before_spawn takes a function of the world (or None), "
+            f"got {type(before_spawn).__name__}"
+        )
     models = ModelLibrary()  # one for the check and the world: its templates are made once
     if isinstance(spec, FleetSpec):
         rehearse(spec, models)  # a spec file was rehearsed as it was read

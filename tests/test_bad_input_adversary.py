@@ -50,6 +50,8 @@ from armfleet.errors import (
 )
 from armfleet.recording import RecordingError
 from armfleet.recording.errors import NotARecording
+from armfleet.spawn_pose import SpawnPose
+from armfleet.spec import ArmSpec, FleetSpec, SpecError
 from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
     HOLD_CHECK_S,
     HOLD_DRIFT_RAD,
@@ -434,6 +436,43 @@ def test_removing_an_arm_whose_gripper_is_closing_on_a_box(world: armfleet.World
     assert np.abs(box.position - resting).max() < 2e-3
     assert np.abs(box.velocity).max() < 1e-2  # at rest [m/s]
     assert world.bus.failures == ()
+
+
+BOB_SPEC = ArmSpec("bob", "panda", SpawnPose(0.0, 0.0))
+
+
+@pytest.mark.parametrize(
+    ("launch_it", "error", "says"),
+    [
+        pytest.param(
+            lambda: armfleet.launch(FleetSpec(arms=(BOB_SPEC,)), before_spawn=5),  # type: ignore[arg-type]
+            ArmfleetError, "before_spawn takes a function of the world (or None), got int",
+            id="launch before_spawn=5 -> refused, not TypeError from the new world",
+        ),
+        pytest.param(
+            lambda: armfleet.launch(FleetSpec(arms=({"name": "bob"},))),  # type: ignore[arg-type]
+            SpecError, "arms[0]: must be an armfleet.spec.ArmSpec, got dict",
+            id="FleetSpec arm given as a dict -> SpecError naming arms[0], not AttributeError",
+        ),
+        pytest.param(
+            lambda: armfleet.launch(FleetSpec(arms=(BOB_SPEC,), objects=("table",))),  # type: ignore[arg-type]
+            SpecError, "objects[0]: must be an armfleet.spec.ObjectSpec, got str",
+            id="FleetSpec object given as a name -> SpecError naming objects[0]",
+        ),
+        pytest.param(
+            lambda: armfleet.launch(FleetSpec(world={"dt_s": 0.001}, arms=(BOB_SPEC,))),  # type: ignore[arg-type]
+            SpecError, "world: must be an armfleet.spec.WorldSpec, got dict",
+            id="FleetSpec world given as a dict -> SpecError naming world",
+        ),
+    ],
+)  # fmt: skip
+def test_a_hand_built_launch_is_checked_before_any_world(
+    launch_it: Callable[[], object], error: type[ArmfleetError], says: str
+) -> None:
+    with pytest.raises(ArmfleetError) as caught:
+        launch_it()
+    assert type(caught.value) is error
+    assert says in str(caught.value) and "\n" not in str(caught.value)
 
 
 # -- reentrancy: what a bus subscriber may not do in the middle of a step ---------------

@@ -58,7 +58,8 @@ from armfleet.object_clearance import place_clear_object
 from armfleet.objects.object_arguments import object_arguments
 from armfleet.objects.object_spec import ObjectSpec, object_spec
 from armfleet.spawn_pose import SpawnPose
-from armfleet.spec.fleet_spec import ArmSpec, FleetSpec
+from armfleet.spec.fleet_spec import ArmSpec, FleetSpec, WorldSpec
+from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.start_clearance import load_clear_body
 
@@ -174,6 +175,7 @@ def rehearse(spec: FleetSpec, models: ModelLibrary | None = None) -> None:
             world's own error (:class:`StartPoseCollision`, :class:`ObjectCollision`,
             :class:`FrameInUse`, ...).
     """
+    _check_entries(spec)
     with SceneRehearsal(models) as scene:
         for arm in spec.arms:
             scene.add_arm(arm)
@@ -260,3 +262,30 @@ class LocatedRehearsal:
         traceback: TracebackType | None,
     ) -> None:
         self.close()
+
+
+def _check_entries(spec: FleetSpec) -> None:
+    """A FleetSpec built by hand holds what its fields say (the dataclass checks
+    nothing): an arm given as a dict escaped as an AttributeError from the check."""
+    if not isinstance(spec.world, WorldSpec):
+        got = type(spec.world).__name__
+        raise SpecError(spec.source, 0, "world", f"must be an armfleet.spec.WorldSpec, got {got}")
+    for field, entries, kind in (
+        ("arms", spec.arms, ArmSpec),
+        ("objects", spec.objects, ObjectSpec),
+    ):
+        if not isinstance(entries, tuple | list):
+            raise SpecError(
+                spec.source,
+                0,
+                field,
+                f"must be a tuple of {kind.__name__}, got {type(entries).__name__}",
+            )
+        for index, entry in enumerate(entries):
+            if not isinstance(entry, kind):
+                raise SpecError(
+                    spec.source,
+                    0,
+                    f"{field}[{index}]",
+                    f"must be an armfleet.spec.{kind.__name__}, got {type(entry).__name__}",
+                )
