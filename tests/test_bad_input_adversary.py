@@ -49,7 +49,7 @@ from armfleet.errors import (
     WorldBusy,
 )
 from armfleet.recording import RecordingError
-from armfleet.recording.errors import NotARecording
+from armfleet.recording.errors import DamagedRecording, NotARecording
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec, SpecError
 from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
@@ -107,6 +107,12 @@ def fifo_replay(world: armfleet.World, bob: armfleet.Arm) -> object:
         return armfleet.open_recording("feed.mcap")
     finally:
         os.close(end)
+
+
+def huge_record(world: armfleet.World, bob: armfleet.Arm) -> object:
+    """MCAP magic, then a header record claiming 2**62 bytes."""
+    Path("huge.mcap").write_bytes(b"\x89MCAP0\r\n\x01" + (2**62).to_bytes(8, "little") + b"x" * 10)
+    return armfleet.open_recording("huge.mcap")
 
 
 REFUSED = [
@@ -240,6 +246,11 @@ REFUSED = [
         fifo_replay,
         NotARecording, "a pipe or a device, not a regular file",
         id="open_recording of a FIFO -> not a regular file (with no writer it hung)",
+    ),
+    case(
+        huge_record,
+        DamagedRecording, "claiming 4,611,686,018,427,387,904 bytes",
+        id="recording whose record claims 2**62 bytes -> DamagedRecording, nothing allocated",
     ),
     case(
         lambda w, b: w.record("."),
