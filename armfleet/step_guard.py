@@ -17,7 +17,7 @@ take the world through :meth:`StepGuard.owned`:
   the arms, or stepping inside a step, broke the step in progress.
 
 ``close`` is the one call that is never refused: from another thread or from
-inside a step it is put off to the end of the step (:meth:`StepGuard.close_or_defer`).
+inside a step it is put off to the end of the step (:meth:`StepGuard.closing`).
 """
 
 from __future__ import annotations
@@ -82,15 +82,31 @@ class StepGuard:
         finally:
             self._in_step = False
 
-    def close_or_defer(self) -> bool:
-        """Whether ``close`` may run now; if not, it is noted for :meth:`take_close`."""
+    @contextlib.contextmanager
+    def closing(self) -> Iterator[bool]:
+        """Own the world to close it now (yields True); or, from inside a step or from
+        another thread than the owner, note the close for the owner, who closes the
+        world when its outermost call returns or ``run`` reaches a step boundary
+        (yields False)."""
+        me = threading.get_ident()
         with self._lock:
-            if (self._owner is None or self._owner == threading.get_ident()) and not (
-                self._in_step
-            ):
-                return True
-            self._close_pending = True
-            return False
+            now = (self._owner is None or self._owner == me) and not self._in_step
+            if now:
+                self._owner = me
+                self._depth += 1
+            else:
+                self._close_pending = True
+        if not now:
+            yield False
+            return
+        try:
+            yield True
+        finally:
+            with self._lock:
+                self._depth -= 1
+                if self._depth == 0:
+                    self._owner = None
+                self._close_pending = False  # closed now
 
     def take_close(self) -> bool:
         """Whether a put-off ``close`` is due now: asked between steps by the outermost

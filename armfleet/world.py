@@ -532,7 +532,11 @@ class World:
 
         From inside a step (a bus subscriber) or from another thread while one steps
         the world, the world closes once that step is over (``run`` then returns)."""
-        if self._lifetime.alive and self._guard.close_or_defer():
+        if not self._lifetime.alive:
+            return
+        with self._guard.closing() as now:
+            if not now:  # the stepping thread closes it once the step is over
+                return
             try:
                 # First, while the handles still work: its refresher thread reads them.
                 if self._viewer is not None:
