@@ -11,7 +11,11 @@ take the world through :meth:`StepGuard.owned`:
   spawn's bring-up, which steps the world from inside ``spawn``, is that same
   thread going deeper, and allowed);
 - another thread is refused with :class:`WorldBusy` (it hands its work to the
-  stepping thread with ``world.submit``);
+  stepping thread with ``world.submit``). Refused, not made to wait: a ``run`` may
+  last for hours, and a waiting thread could starve behind a loop of steps. A
+  thread that steps in its own loop owns the world only during each step, so a
+  direct call from elsewhere may land between two steps and the loop's next step
+  is then the one refused: that is why other threads should use ``submit``;
 - a call from inside a step (a bus subscriber) is refused with
   :class:`WorldBusy` too: removing an arm while the status loop iterates over
   the arms, or stepping inside a step, broke the step in progress.
