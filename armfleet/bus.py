@@ -43,8 +43,25 @@ GoneHandler = Callable[[str, str], None]
 TOPIC_PATTERN = re.compile(r"^(/[a-z][a-z0-9_]*)+$")
 
 
-class TopicError(ArmfleetError):
+class BusError(ArmfleetError):
+    """An argument the bus refuses where it is taken (a topic, a callback)."""
+
+
+class TopicError(BusError):
     """A malformed topic name, or a message of the wrong type for a topic."""
+
+
+class CallbackError(BusError):
+    """Something that is not a function given where the bus calls one back.
+
+    Attributes:
+        role: what it was given as (``"callback"``, ``"on_error"``, ``"on_gone"``).
+        got: the type name of what was given.
+    """
+
+    def __init__(self, call: str, role: str, got: object) -> None:
+        self.role, self.got = role, type(got).__name__
+        super().__init__(f"{call}: {role} must be a function (or callable), got {self.got}")
 
 
 @dataclass(frozen=True)
@@ -192,6 +209,9 @@ class Bus:
             on_gone: called with the topic and why when it is withdrawn (:meth:`unadvertise`).
         """
         _check_name(topic)
+        _check_callable("subscribe", "callback", callback)
+        _check_callable("subscribe", "on_error", on_error, optional=True)
+        _check_callable("subscribe", "on_gone", on_gone, optional=True)
         subscription = Subscription(topic, callback, self, on_error, on_gone)
         self._subscriptions[topic].append(subscription)
         for message in self._latched.get(topic, ()):
@@ -202,15 +222,19 @@ class Bus:
     def subscribe_all(self, callback: Callable[[str, Any], None]) -> Tap:
         """Call ``callback(topic, message)`` for every message on every topic (recorders,
         bridges). Latched messages are not replayed; read :meth:`latched` for those."""
+        _check_callable("subscribe_all", "callback", callback)
         tap = Tap(callback, self)
         self._taps.append(tap)
         return tap
 
     def latched(self, topic: str) -> list[Any]:
         """The latched messages of ``topic`` (e.g. every arm's ``/tf_static``)."""
+        _check_name(topic)
         return list(self._latched.get(topic, ()))
 
     def has_subscribers(self, topic: str) -> bool:
+        """Whether a message on ``topic`` would reach anyone (a subscriber or a tap)."""
+        _check_name(topic)
         return bool(self._taps) or bool(self._subscriptions.get(topic))
 
     def publish(self, topic: str, message: Any, *, latch: bool = False) -> None:
@@ -221,7 +245,9 @@ class Bus:
         """
         if latch is not False:
             latch = flag(latch, "latch")
-        expected = self._types.get(topic)
+        # A known topic is a checked one; anything else (a list: no unhashable-key
+        # TypeError) goes through advertise, which checks the name.
+        expected = self._types.get(topic) if isinstance(topic, str) else None
         if expected is None:
             self.advertise(topic, type(message))
         elif not isinstance(message, expected):
@@ -279,6 +305,12 @@ def _callback_name(callback: Callable[..., Any]) -> str:
         return _callback_name(inner) if inner is not None else repr(callback)
     module = getattr(callback, "__module__", None)
     return f"{module}.{name}" if module else str(name)
+
+
+def _check_callable(call: str, role: str, value: object, *, optional: bool = False) -> None:
+    """The one rule for the functions the bus calls back: refused when taken, not per step."""
+    if not (callable(value) or (optional and value is None)):
+        raise CallbackError(call, role, value)
 
 
 def _check_name(topic: str) -> None:

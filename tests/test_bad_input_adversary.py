@@ -35,7 +35,7 @@ import pybullet as p
 import pytest
 
 import armfleet
-from armfleet.bus import TopicError
+from armfleet.bus import BusError, TopicError
 from armfleet.errors import (
     ArmfleetError,
     NoGripper,
@@ -396,32 +396,52 @@ def test_extreme_gains_in_range_hurt_no_neighbour(
     assert world.safety.stops == 0
 
 
-BUS_OWNED = "armfleet/bus.py is another engineer's until ~07:30 (issue 14): reported, not fixed"
-
-
 @pytest.mark.parametrize(
-    "action",
+    ("action", "message"),
     [
         pytest.param(
             lambda w: w.bus.subscribe("/bob/joint_states", 5),
-            id="subscribe a non-callable -> TopicError now, not a dropped subscriber per step",
-            marks=pytest.mark.xfail(strict=True, reason=BUS_OWNED),
+            "subscribe: callback must be a function",
+            id="subscribe a non-callable -> CallbackError now, not a dropped subscriber per step",
+        ),
+        pytest.param(
+            lambda w: w.bus.subscribe("/bob/joint_states", print, on_error=5),
+            "subscribe: on_error must be a function",
+            id="subscribe with on_error=5 -> CallbackError now, not when the callback fails",
+        ),
+        pytest.param(
+            lambda w: w.bus.subscribe_all("print"),
+            "subscribe_all: callback must be a function",
+            id="subscribe_all a non-callable -> CallbackError now, not a dropped tap per step",
         ),
         pytest.param(
             lambda w: w.bus.publish(["/bob/status"], None),
+            "topic name ['/bob/status'] is malformed",
             id="publish to a list as topic -> TopicError, not TypeError (unhashable)",
-            marks=pytest.mark.xfail(strict=True, reason=BUS_OWNED),
+        ),
+        pytest.param(
+            lambda w: w.bus.latched("///"),
+            "topic name '///' is malformed",
+            id="latched of a malformed topic -> TopicError, not an empty list",
+        ),
+        pytest.param(
+            lambda w: w.bus.has_subscribers(None),
+            "topic name None is malformed",
+            id="has_subscribers(None) -> TopicError, not an answer about no topic",
         ),
     ],
 )
 def test_bus_arguments_are_checked_where_they_are_taken(
-    world: armfleet.World, action: Reaction
+    world: armfleet.World, action: Reaction, message: str
 ) -> None:
     world.spawn("bob")
-    with pytest.raises(TopicError):
+    topics = world.bus.topics
+    with pytest.raises(BusError) as raised:
         action(world)
+    assert str(raised.value).startswith(message) and "\n" not in str(raised.value)
     world.run(0.01)
     assert world.bus.failures == ()
+    assert world.bus.topics == topics
 
 
 def test_removing_an_arm_whose_gripper_is_closing_on_a_box(world: armfleet.World) -> None:
