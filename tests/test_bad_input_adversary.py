@@ -51,7 +51,7 @@ from armfleet.errors import (
 from armfleet.recording import RecordingError
 from armfleet.recording.errors import DamagedRecording, NotARecording
 from armfleet.spawn_pose import SpawnPose
-from armfleet.spec import ArmSpec, FleetSpec, SpecError
+from armfleet.spec import ArmSpec, FleetSpec, SpecError, load_spec
 from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
     HOLD_CHECK_S,
     HOLD_DRIFT_RAD,
@@ -78,6 +78,14 @@ def not_mcap(world: armfleet.World, bob: armfleet.Arm) -> object:
 def fifo_parameters(world: armfleet.World, bob: armfleet.Arm) -> object:
     os.mkfifo("gains.yaml")  # nobody writes to it: opening it would block for ever
     return world.spawn("k", at=(0, 3), parameter_files={"position_controller": "gains.yaml"})
+
+
+def fifo_mesh(world: armfleet.World, bob: armfleet.Arm) -> object:
+    end = fed_fifo("rock.obj")  # fed and held open: code that reads it still ends
+    try:
+        return world.add_object("rock", "mesh", mesh="rock.obj", at=(2, 2, 0.5))
+    finally:
+        os.close(end)
 
 
 def fifo_recording(world: armfleet.World, bob: armfleet.Arm) -> object:
@@ -178,20 +186,30 @@ REFUSED = [
         lambda w, b: w.spawn(
             "k", at=(0, 3), parameter_files={"position_controller": "/dev/zero"}
         ),
-        ParameterError, "/dev/zero: controller parameter file is not a regular file",
+        ParameterError, "/dev/zero: controller parameter file is a device, not a regular file",
         "position_controller.yaml",
         id="parameter file /dev/zero -> not a regular file (was 'not found'), no endless read",
     ),
     case(
         lambda w, b: w.spawn("k", at=(0, 3), parameter_files={"position_controller": "."}),
-        ParameterError, ".: controller parameter file is not a regular file",
+        ParameterError, ".: controller parameter file is a folder, not a regular file",
         "give a YAML file like", "position_controller.yaml",
         id="parameter file a directory -> not a regular file (was 'not found')",
     ),
     case(
         fifo_parameters,
-        ParameterError, "gains.yaml: controller parameter file is not a regular file",
+        ParameterError, "gains.yaml: controller parameter file is a pipe (FIFO), not a regular",
         id="parameter file a FIFO -> not a regular file, no hang",
+    ),
+    case(
+        fifo_mesh,
+        ObjectError, "rock.obj' is a pipe (FIFO), not a regular file",
+        id="mesh file a FIFO -> not a regular file (was 'not found')",
+    ),
+    case(
+        lambda w, b: w.add_object("rock", "mesh", mesh="/dev/zero", at=(2, 2, 0.5)),
+        ObjectError, "unsupported mesh file", ".obj, .stl",
+        id="mesh /dev/zero -> unsupported mesh file with the suffixes, nothing read",
     ),
     case(
         lambda w, b: w.add_object("cube", "box", size=(1e6, 1e6, 1e6), at=(2, 2, 0.5)),
@@ -244,7 +262,7 @@ REFUSED = [
     ),
     case(
         fifo_replay,
-        NotARecording, "a pipe or a device, not a regular file",
+        NotARecording, "(it is a pipe (FIFO), not a regular file)",
         id="open_recording of a FIFO -> not a regular file (with no writer it hung)",
     ),
     case(
@@ -259,7 +277,7 @@ REFUSED = [
     ),
     case(
         fifo_recording,
-        RecordingError, "pipe.mcap: it is not a regular file",
+        RecordingError, "pipe.mcap: it is a pipe (FIFO), not a regular file",
         id="record() to a FIFO -> not a regular file (was accepted, or hung with no reader)",
     ),
 ]  # fmt: skip
@@ -370,7 +388,7 @@ def test_cli_replay_of_a_fifo_is_one_line_exit_2(tmp_path: Path) -> None:
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in done.stderr
-    assert "is not an MCAP recording (it is a pipe or a device, not a regular file)" in lines[0]
+    assert "is not an MCAP recording (it is a pipe (FIFO), not a regular file)" in lines[0]
 
 
 @pytest.mark.parametrize(
@@ -682,3 +700,78 @@ def test_submit_from_another_thread_is_the_way(world: armfleet.World) -> None:
 
     world.run(0.05, on_step=at_step)
     assert list(world.arms) == ["bob", "dan"]
+
+
+def controller_file_spec(tmp_path: Path, make: Callable[[Path], str]) -> Path:
+    """A spec in ``tmp_path`` whose position_controller file is what ``make`` names."""
+    name = make(tmp_path)
+    spec = tmp_path / "cell.yaml"
+    spec.write_text(
+        "arms:\n  - name: bob\n    model: panda\n    controllers:\n"
+        f"      position_controller: {{file: {name}}}\n"
+    )
+    return spec
+
+
+def fifo_named(tmp_path: Path) -> str:
+    os.mkfifo(tmp_path / "gains.yaml")  # nobody writes to it: opening it would block
+    return "gains.yaml"
+
+
+def folder_named(tmp_path: Path) -> str:
+    (tmp_path / "gains").mkdir()
+    return "gains"
+
+
+@pytest.mark.parametrize(
+    ("make", "problem"),
+    [
+        pytest.param(
+            folder_named, "'gains' is a folder, not a regular file",
+            id="spec's controller file a folder -> not a regular file (was 'not found next to')",
+        ),
+        pytest.param(
+            lambda tmp: "/dev/zero", "'/dev/zero' is a device, not a regular file",
+            id="spec's controller file /dev/zero -> not a regular file (was 'not found')",
+        ),
+        pytest.param(
+            fifo_named, "'gains.yaml' is a pipe (FIFO), not a regular file",
+            id="spec's controller file a FIFO -> not a regular file (was 'not found'), no hang",
+        ),
+    ],
+)  # fmt: skip
+def test_a_spec_naming_a_controller_file_that_is_no_regular_file(
+    tmp_path: Path, make: Callable[[Path], str], problem: str
+) -> None:
+    """The Python loader and ``launch --check`` both say what the file is, on its line."""
+    spec = controller_file_spec(tmp_path, make)
+    with pytest.raises(SpecError) as raised:
+        load_spec(spec)
+    expected = f"{spec}:5: arms[0].controllers.position_controller.file: controller file {problem}"
+    assert str(raised.value) == expected
+    done = subprocess.run(
+        [sys.executable, "-m", "armfleet.cli.main", "launch", str(spec), "--check"],
+        capture_output=True,
+        text=True,
+        env=os.environ | {"XDG_RUNTIME_DIR": str(tmp_path)},
+    )
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert problem in line
+
+
+def test_cli_launch_of_a_fifo_is_one_line_exit_2(tmp_path: Path) -> None:
+    """Was: 'armfleet launch <fifo>' said 'no such spec file' of a file that is there."""
+    end = fed_fifo(str(tmp_path / "cell.yaml"))  # fed and held open: no hang on old code
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "armfleet.cli.main", "launch", str(tmp_path / "cell.yaml")],
+            capture_output=True,
+            text=True,
+            env=os.environ | {"XDG_RUNTIME_DIR": str(tmp_path)},
+        )
+    finally:
+        os.close(end)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert "cell.yaml: is a pipe (FIFO), not a regular file; give a spec file (.yaml)" in line

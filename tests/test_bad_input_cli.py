@@ -251,7 +251,7 @@ BAD = [
     # -- paths: a folder, an empty path -----------------------------------------------------
     pytest.param(
         ["launch", str(TESTS_DIR)],
-        [f"{TESTS_DIR}: is a folder; give a spec file (.yaml) or a shipped spec's name: "],
+        [f"{TESTS_DIR}: is a folder, not a regular file; give a spec file (.yaml) or a shipped"],
         id="launch a folder -> it is a folder, give a spec file or a shipped name",
     ),
     pytest.param(

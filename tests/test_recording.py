@@ -418,7 +418,7 @@ def test_bad_files_to_read(tmp_path: Path) -> None:
     (tmp_path / "empty.mcap").write_bytes(b"")
     with pytest.raises(armfleet.RecordingError, match="empty"):
         open_recording(tmp_path / "empty.mcap")
-    with pytest.raises(armfleet.RecordingError, match="directory"):
+    with pytest.raises(armfleet.RecordingError, match="is a folder, not a regular file"):
         open_recording(tmp_path)
 
 

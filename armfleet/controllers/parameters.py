@@ -18,6 +18,7 @@ from typing import Any
 from armfleet.errors import ParameterError
 from armfleet.located_yaml import LocatedDict, YamlDocumentError, read_located
 from armfleet.paths import data_dir
+from armfleet.user_paths import file_problem
 
 
 @dataclass(frozen=True)
@@ -58,8 +59,8 @@ def load_parameters(
         ParameterError: unknown key (with a "did you mean"), wrong type or out of bounds.
     """
     path = path or controller_file(controller)
-    if not path.is_file():  # a directory, device or pipe is no file to read either
-        problem = "is not a regular file" if path.exists() else "not found"
+    problem = file_problem(path)  # a folder, device or pipe is no file to read either
+    if problem is not None:
         raise ParameterError(
             f"{path}: controller parameter file {problem}; give a YAML file "
             f"like {controller_file(controller)}"

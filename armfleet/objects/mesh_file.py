@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from armfleet.messages import FloatArray
+from armfleet.user_paths import file_problem
 
 MESH_SUFFIXES = (".obj", ".stl")
 _STL_HEADER = 80
@@ -31,8 +32,9 @@ def mesh_extents(path: Path) -> FloatArray:
     if path.suffix.lower() not in MESH_SUFFIXES:
         valid = ", ".join(MESH_SUFFIXES)
         raise ValueError(f"{path.name}: unsupported mesh file; use one of {valid}")
-    if not path.is_file():
-        raise ValueError(f"mesh file {str(path)!r} not found")
+    problem = file_problem(path)
+    if problem is not None:
+        raise ValueError(f"mesh file {str(path)!r} {problem}")
     try:
         data = path.read_bytes()
     except OSError as exc:

@@ -27,6 +27,7 @@ from mcap.writer import CompressionType, Writer
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.interrupts import deferred_interrupts
 from armfleet.recording.schemas import MessageSchema
+from armfleet.user_paths import file_problem
 
 #: Uncompressed size at which a chunk is compressed and written [bytes].
 CHUNK_BYTES = 1024 * 1024
@@ -44,8 +45,9 @@ def _claim(path: Path) -> io.FileIO:
     one's file intact. A FIFO or a device is no place for a recording either (opening
     a FIFO nobody reads blocked for ever).
     """
-    if path.exists() and not path.is_file():
-        raise RecordingError(f"cannot write the recording {path}: it is not a regular file")
+    problem = file_problem(path, missing_ok=True)
+    if problem is not None:
+        raise RecordingError(f"cannot write the recording {path}: it {problem}")
     try:  # not truncated yet: O_TRUNC before the lock would empty a running recorder's file
         raw = io.FileIO(os.open(path, os.O_WRONLY | os.O_CREAT, 0o666), "w")
     except OSError as exc:

@@ -40,7 +40,7 @@ from armfleet.recording.errors import (
 )
 from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan, ScanResult
 from armfleet.recording.recorder import SPEC_ATTACHMENT
-from armfleet.user_paths import given_path
+from armfleet.user_paths import file_problem, given_path
 
 NS_PER_S = 1e9
 CHUNK_OPCODE = bytes([Opcode.CHUNK])
@@ -283,9 +283,10 @@ class Recording:
 
 
 def _check_magic(path: Path) -> None:
-    if path.exists() and not path.is_file() and not path.is_dir():
+    problem = file_problem(path, missing_ok=True)
+    if problem is not None:
         # Opening a FIFO nobody writes to waits for ever; a device is no recording either.
-        raise NotARecording(path, "it is a pipe or a device, not a regular file")
+        raise NotARecording(path, f"it {problem}")
     try:
         with path.open("rb") as stream:
             head = stream.read(len(MCAP_MAGIC))

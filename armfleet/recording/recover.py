@@ -38,7 +38,7 @@ from armfleet.recording.errors import (
 )
 from armfleet.recording.mcap_sink import CHUNK_BYTES
 from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan
-from armfleet.user_paths import given_path
+from armfleet.user_paths import file_problem, given_path
 
 
 @dataclass(frozen=True)
@@ -144,8 +144,9 @@ def _publish(finished: Path, target: Path) -> None:
 def _check_paths(source: Path, target: Path) -> None:
     if not source.exists():
         raise RecordingNotFound(source)
-    if not source.is_file():
-        raise NotARecording(source, "it is not a file")
+    problem = file_problem(source)
+    if problem is not None:
+        raise NotARecording(source, f"it {problem}")
     with source.open("rb") as stream:
         if stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
             raise NotARecording(source, "it does not start with the MCAP magic bytes")

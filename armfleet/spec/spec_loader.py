@@ -44,7 +44,7 @@ from armfleet.spec.scene_rehearsal import LocatedRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.time_step import MAX_DT_S, MIN_DT_S
-from armfleet.user_paths import given_path
+from armfleet.user_paths import file_problem, given_path
 
 TOP_KEYS = ("world", "arms", "grid", "objects")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
@@ -61,19 +61,16 @@ def find_spec(name_or_path: str) -> Path:
     shipped = data_dir("launch_specs")
     names = sorted(p.stem for p in shipped.glob("*.yaml"))
     listed = ", ".join(names) or "(none)"
-    try:
-        if path.is_file():
-            return path
-        for candidate in (shipped / name_or_path, shipped / f"{name_or_path}.yaml"):
-            if candidate.is_file():
-                return candidate
-        is_folder = path.is_dir()
-    except OSError as exc:  # e.g. a name too long for the file system
-        raise SpecError(name_or_path, 0, "", f"cannot be read ({exc.strerror})") from None
-    if is_folder:
-        problem = f"is a folder; give a spec file (.yaml) or a shipped spec's name: {listed}"
-        raise SpecError(name_or_path, 0, "", problem)
-    raise SpecError(name_or_path, 0, "", f"no such spec file; shipped specs: {listed}")
+    problem = file_problem(path)
+    if problem is None:
+        return path
+    for candidate in (shipped / name_or_path, shipped / f"{name_or_path}.yaml"):
+        if file_problem(candidate) is None:
+            return candidate
+    if problem == "not found":
+        raise SpecError(name_or_path, 0, "", f"no such spec file; shipped specs: {listed}")
+    problem = f"{problem}; give a spec file (.yaml) or a shipped spec's name: {listed}"
+    raise SpecError(name_or_path, 0, "", problem)
 
 
 def load_spec(name_or_path: str | Path) -> FleetSpec:
@@ -216,8 +213,13 @@ def _controller_file(
         candidates.append(base_dir / name)
     candidates.append(data_dir("controllers") / name)
     for candidate in candidates:
-        if candidate.is_file():
+        problem = file_problem(candidate)
+        if problem is None:
             return candidate.resolve()
+        if problem != "not found":  # found, but no file to read: say so, not "not found"
+            raise reader.error(
+                config.line_of("file"), f"{field}.file", f"controller file {name!r} {problem}"
+            )
     shipped = sorted(p.name for p in data_dir("controllers").glob("*.yaml"))
     raise reader.error(
         config.line_of("file"),
