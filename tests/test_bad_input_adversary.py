@@ -88,6 +88,35 @@ def fifo_mesh(world: armfleet.World, bob: armfleet.Arm) -> object:
         os.close(end)
 
 
+def stl_over_the_limit(world: armfleet.World, bob: armfleet.Arm) -> object:
+    """A binary STL of 200,001 triangles (10 MB): one over the limit, counted from its
+    header. Was: accepted, PyBullet building its shape while the world waited."""
+    count = 200_001
+    corners = np.zeros((count, 12), dtype="<f4")
+    corners[:, 6] = corners[:, 10] = 0.1  # each triangle (0,0,0) (0.1,0,0) (0,0.1,0)
+    records = np.zeros(count, dtype=[("values", "<f4", 12), ("attribute", "<u2")])
+    records["values"] = corners
+    Path("dense.stl").write_bytes(bytes(80) + count.to_bytes(4, "little") + records.tobytes())
+    return world.add_object("dense", "mesh", mesh="dense.stl", mass=0, at=(2, 2, 0))
+
+
+def obj_polygon_over_the_limit(world: armfleet.World, bob: armfleet.Arm) -> object:
+    """One OBJ face of 200,003 corners on a circle: 200,001 fan triangles in 1 face line."""
+    corners = 200_003
+    angles = np.linspace(0.0, 2 * math.pi, corners, endpoint=False)
+    lines = [f"v {0.1 * math.cos(a):.7f} {0.1 * math.sin(a):.7f} 0" for a in angles]
+    lines.append("f " + " ".join(str(i) for i in range(1, corners + 1)))
+    Path("disc.obj").write_text("\n".join(lines) + "\n")
+    return world.add_object("disc", "mesh", mesh="disc.obj", mass=0, at=(2, 2, 0))
+
+
+def stl_over_64_mib(world: armfleet.World, bob: armfleet.Arm) -> object:
+    """A 65 MiB file (sparse: nothing written), refused by its size before it is read."""
+    with open("huge.stl", "wb") as stream:
+        stream.truncate(65 * 2**20)
+    return world.add_object("huge", "mesh", mesh="huge.stl", mass=0, at=(2, 2, 0))
+
+
 def fifo_recording(world: armfleet.World, bob: armfleet.Arm) -> object:
     """A FIFO named like a recording. With nobody reading it, opening it for writing
     blocked for ever; a reader is kept open here so that, were it accepted again, the
@@ -205,6 +234,21 @@ REFUSED = [
         fifo_mesh,
         ObjectError, "rock.obj' is a pipe (FIFO), not a regular file",
         id="mesh file a FIFO -> not a regular file (was 'not found')",
+    ),
+    case(
+        stl_over_the_limit,
+        ObjectError, "dense.stl' has 200,001 triangles, over the limit of 200,000", "decimate",
+        id="binary STL of 200,001 triangles -> over the 200,000 limit, decimate (was added)",
+    ),
+    case(
+        obj_polygon_over_the_limit,
+        ObjectError, "disc.obj' has 200,001 triangles, over the limit of 200,000", "decimate",
+        id="OBJ polygon of 200,001 fan triangles in one face -> over the limit (was added)",
+    ),
+    case(
+        stl_over_64_mib,
+        ObjectError, "huge.stl' is 65 MiB, over the 64 MiB limit", "decimate",
+        id="mesh file of 65 MiB -> over the 64 MiB limit before it is read (was read)",
     ),
     case(
         lambda w, b: w.add_object("rock", "mesh", mesh="/dev/zero", at=(2, 2, 0.5)),
