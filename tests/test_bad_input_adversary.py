@@ -88,15 +88,20 @@ def fifo_mesh(world: armfleet.World, bob: armfleet.Arm) -> object:
         os.close(end)
 
 
+def stl_over_the_limit_file(path: Path) -> None:
+    """A binary STL of 200,001 triangles (0,0,0) (0.1,0,0) (0,0.1,0), 10 MB."""
+    count = 200_001
+    corners = np.zeros((count, 12), dtype="<f4")
+    corners[:, 6] = corners[:, 10] = 0.1
+    records = np.zeros(count, dtype=[("values", "<f4", 12), ("attribute", "<u2")])
+    records["values"] = corners
+    path.write_bytes(bytes(80) + count.to_bytes(4, "little") + records.tobytes())
+
+
 def stl_over_the_limit(world: armfleet.World, bob: armfleet.Arm) -> object:
     """A binary STL of 200,001 triangles (10 MB): one over the limit, counted from its
     header. Was: accepted, PyBullet building its shape while the world waited."""
-    count = 200_001
-    corners = np.zeros((count, 12), dtype="<f4")
-    corners[:, 6] = corners[:, 10] = 0.1  # each triangle (0,0,0) (0.1,0,0) (0,0.1,0)
-    records = np.zeros(count, dtype=[("values", "<f4", 12), ("attribute", "<u2")])
-    records["values"] = corners
-    Path("dense.stl").write_bytes(bytes(80) + count.to_bytes(4, "little") + records.tobytes())
+    stl_over_the_limit_file(Path("dense.stl"))
     return world.add_object("dense", "mesh", mesh="dense.stl", mass=0, at=(2, 2, 0))
 
 
@@ -819,3 +824,23 @@ def test_cli_launch_of_a_fifo_is_one_line_exit_2(tmp_path: Path) -> None:
     assert done.returncode == 2 and "Traceback" not in done.stderr
     (line,) = done.stderr.strip().splitlines()
     assert "cell.yaml: is a pipe (FIFO), not a regular file; give a spec file (.yaml)" in line
+
+
+def test_cli_launch_check_of_a_spec_with_a_mesh_over_the_limit(tmp_path: Path) -> None:
+    """The mesh limit holds on the launch-spec path too: ``launch --check`` refuses in one
+    line, on the mesh's line, before any world (was: passed the check)."""
+    stl_over_the_limit_file(tmp_path / "dense.stl")
+    spec = tmp_path / "cell.yaml"
+    spec.write_text(
+        "objects:\n  - name: dense\n    shape: mesh\n    mesh: dense.stl\n    mass_kg: 0\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "armfleet.cli.main", "launch", str(spec), "--check"],
+        capture_output=True,
+        text=True,
+        env=os.environ | {"XDG_RUNTIME_DIR": str(tmp_path)},
+    )
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    (line,) = done.stderr.strip().splitlines()
+    assert f"{spec}:4: objects[0].mesh: mesh file " in line
+    assert "has 200,001 triangles, over the limit of 200,000" in line and "decimate" in line
