@@ -10,6 +10,8 @@ import pinocchio as pin
 from armfleet.arm_body import ArmBody
 from armfleet.bus import Bus
 from armfleet.cartesian_path import LinearPathPlanner
+from armfleet.checks.flags import flag
+from armfleet.checks.real_numbers import STAMP_VALID, real_number
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.controllers.gripper_controller import GripperController
 from armfleet.controllers.jerk_limited_trajectory import MotionPlan
@@ -22,7 +24,6 @@ from armfleet.errors import (
     UnknownArm,
     UnreachablePose,
 )
-from armfleet.flags import flag
 from armfleet.gripper import Gripper
 from armfleet.inverse_kinematics import InverseKinematics, link_frame, world_goal
 from armfleet.kinematics import ArmKinematics
@@ -35,7 +36,6 @@ from armfleet.messages import (
     JointState,
     Positions,
 )
-from armfleet.real_numbers import STAMP_VALID, real_number
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose

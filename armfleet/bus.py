@@ -32,8 +32,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from armfleet.checks.flags import flag
 from armfleet.errors import ArmfleetError
-from armfleet.flags import flag
 
 logger = logging.getLogger("armfleet")
 

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 from armfleet.bus import Bus
+from armfleet.checks.real_numbers import STAMP_VALID, real_number
 from armfleet.controllers.gripper_controller import GripperController
 from armfleet.lifetime import Lifetime, while_alive
 from armfleet.messages import GripperCommand, GripperMode, GripperState
-from armfleet.real_numbers import STAMP_VALID, real_number
 
 
 class Gripper:

@@ -32,11 +32,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from armfleet.checks.number_ranges import WORLD_COORDINATE_M
+from armfleet.checks.real_numbers import all_real
 from armfleet.errors import TargetPoseError, UnknownFrame
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
-from armfleet.number_ranges import WORLD_COORDINATE_M
-from armfleet.real_numbers import all_real
 
 #: Orthonormality and last-row tolerance of a 4x4 pose given by a user.
 POSE_TOLERANCE = 1e-6

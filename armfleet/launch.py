@@ -6,9 +6,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from armfleet.arm import Arm
+from armfleet.checks.flags import flag
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError
-from armfleet.flags import flag
 from armfleet.objects import ObjectSpec, WorldObject
 from armfleet.objects.object_arguments import object_arguments
 from armfleet.spec import FleetSpec, load_spec

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
+from armfleet.checks.real_numbers import is_real, is_real_vector
 from armfleet.errors import PoseError
-from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
-from armfleet.real_numbers import is_real, is_real_vector
 
 AT_SYNTAX = "X,Y[,Z[,YAW_DEG]]"
 

@@ -21,11 +21,14 @@ from armfleet.arm_assembly import (
 )
 from armfleet.bringup import BRINGUP_TOPIC, bring_up
 from armfleet.bus import Bus
+from armfleet.checks.flags import flag
+from armfleet.checks.number_ranges import PORT, RUN_DURATION_S
+from armfleet.checks.real_numbers import real_number
+from armfleet.checks.time_step import check_dt
 from armfleet.contact_monitor import ContactMonitor
 from armfleet.controllers.fleet_update import FleetUpdate
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, NameInUse, UnknownArm, WorldClosed
-from armfleet.flags import flag
 from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
 from armfleet.joint_memory import JointMemory
@@ -38,7 +41,6 @@ from armfleet.messages import (
     Positions,
 )
 from armfleet.names import check_arm_name
-from armfleet.number_ranges import PORT, RUN_DURATION_S
 from armfleet.objects import ObjectSet, WorldObject, object_spec
 from armfleet.objects.object_spec import (
     DEFAULT_COLOR,
@@ -47,14 +49,12 @@ from armfleet.objects.object_spec import (
     DEFAULT_ROLLING_FRICTION_M,
     DEFAULT_SPINNING_FRICTION_M,
 )
-from armfleet.real_numbers import real_number
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 from armfleet.step_guard import StepGuard, owning
 from armfleet.synchronised_motion import move_together
 from armfleet.tf_tree import TfTree
-from armfleet.time_step import check_dt
 
 if TYPE_CHECKING:
     from armfleet.recording import Recorder
@@ -73,7 +73,7 @@ class World:
     """A PyBullet world (DIRECT mode) with gravity, a floor at z = 0 and arms.
 
     Args:
-        dt: physics step [s], in [``MIN_DT_S``, ``MAX_DT_S``] of :mod:`armfleet.time_step`.
+        dt: physics step [s], in [``MIN_DT_S``, ``MAX_DT_S``] of :mod:`armfleet.checks.time_step`.
         gravity: gravitational acceleration along -z [m/s^2], in [-100, 100].
         models: library of arm models; armfleet's ``description/`` by default.
         viewer: start a MeshCat viewer (``world.viewer.url``); if it cannot

@@ -1,5 +1,5 @@
 """Which physics steps every shipped model works at: the measurement behind
-``armfleet.time_step.MAX_DT_S``.
+``armfleet.checks.time_step.MAX_DT_S``.
 
 For every model in description/ and every step dt asked for, it brings one arm up
 alone, moves every joint +0.3 rad (kept 0.05 rad inside the limits), and prints
@@ -22,7 +22,7 @@ import argparse
 
 import numpy as np
 
-from armfleet import time_step
+from armfleet.checks import time_step
 from armfleet.description import ModelLibrary
 
 DEFAULT_STEPS = (0.001, 0.002, 0.0022, 0.003, 0.004, 0.0046, 0.005, 0.01, 0.02)

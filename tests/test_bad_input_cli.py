@@ -26,12 +26,12 @@ import numpy as np
 import pytest
 
 import armfleet
+from armfleet.checks.user_paths import EmptyPath
 from armfleet.cli.status_line import status_line
 from armfleet.errors import InvalidNumber
 from armfleet.messages import ArmMode
 from armfleet.recording import export_html, open_recording, plot_recording, recover
 from armfleet.spec import load_spec
-from armfleet.user_paths import EmptyPath
 from tests.conftest import RecordedRun
 from tests.remote_world import ARMFLEET, WorldProcess, cli, runtime_env, wait_until
 
@@ -559,7 +559,7 @@ def test_the_python_api_refuses_an_empty_path_as_the_command_line_does(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """One rule (armfleet.user_paths) for every path given as text; nothing is written."""
+    """One rule (armfleet.checks.user_paths) for every path given as text; nothing is written."""
     monkeypatch.chdir(tmp_path)  # whatever is written to '.' would land here
     with pytest.raises(EmptyPath, match=re.escape(expected)):
         call(recorded_run)

@@ -1,6 +1,6 @@
 """Bad types and time steps through the Python API (issue #14, items 4 and 8).
 
-Every number a user gives goes through one rule (:mod:`armfleet.real_numbers`): text,
+Every number a user gives goes through one rule (:mod:`armfleet.checks.real_numbers`): text,
 bool, complex and None are not numbers, even where ``float()`` would take them. Each
 case below is one class of bad input; it must raise its own :class:`ArmfleetError`
 subclass with a one-line message naming the argument and what is valid, and leave the
@@ -9,7 +9,7 @@ reference, nothing commanded, bob still holding within 1e-4 rad), nor command th
 gripper.
 
 The step ``dt`` has one range for :class:`armfleet.World` and launch specs
-(:mod:`armfleet.time_step`); at its top every shipped model still brings up and meets
+(:mod:`armfleet.checks.time_step`); at its top every shipped model still brings up and meets
 issue #2's tracking figures.
 """
 
@@ -27,6 +27,7 @@ import pinocchio as pin
 import pytest
 
 import armfleet
+from armfleet.checks.time_step import MAX_DT_S, MIN_DT_S
 from armfleet.description import ModelLibrary
 from armfleet.errors import (
     ArmfleetError,
@@ -44,7 +45,6 @@ from armfleet.recording import RecordingError
 from armfleet.remote import RemoteError, serve
 from armfleet.remote.remote_arm import RemoteArm
 from armfleet.spec import SpecError, parse_spec
-from armfleet.time_step import MAX_DT_S, MIN_DT_S
 from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
     BadInput,
     Scene,
@@ -162,7 +162,7 @@ CASES = [
         UnknownFrame, "frame 7 not found", "links of bob:", "tool0",
         id="move_to_pose link not a string -> UnknownFrame listing the links",
     ),
-    # -- yes/no flags: a bool, not whatever Python reads as true (armfleet.flags) ----------
+    # -- yes/no flags: a bool, not whatever Python reads as true (armfleet.checks.flags) ----------
     case(
         lambda w, b: b.move_to_pose(tool0(w), linear="no"),
         InvalidFlag, "linear = 'no' is invalid; give True or False",

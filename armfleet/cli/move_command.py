@@ -7,11 +7,11 @@ import argparse
 
 import numpy as np
 
+from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.messages import FloatArray
-from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.objects.object_spec import pose_matrix
 from armfleet.remote import Client
 from armfleet.remote.remote_arm import WAIT_TIMEOUT_S, RemoteArm

@@ -1,5 +1,5 @@
 """Argparse ``type=`` checks for the numbers of every command (timeouts, durations, step
-counts, ports, speeds), built from the ranges of :mod:`armfleet.number_ranges`.
+counts, ports, speeds), built from the ranges of :mod:`armfleet.checks.number_ranges`.
 
 A value outside its range stops the command while its arguments are parsed, before it
 connects to a world or sends anything; the one error line names the argument and the
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from armfleet.number_ranges import (
+from armfleet.checks.number_ranges import (
     PORT,
     PORT_OR_FREE,
     REPLAY_SPEED,

@@ -1,7 +1,7 @@
 """The argparse ``type=`` of every path a command takes (recordings, specs, outputs).
 
 An empty path would otherwise become ``.`` (``Path("")`` is the current folder). It is
-refused while the arguments are parsed, by the rule of :mod:`armfleet.user_paths`, in
+refused while the arguments are parsed, by the rule of :mod:`armfleet.checks.user_paths`, in
 the argument's own name, e.g. ``argument RUN.mcap: the path is empty; give a file path``.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from armfleet.user_paths import empty_path_problem
+from armfleet.checks.user_paths import empty_path_problem
 
 
 def path_text(text: str) -> str:

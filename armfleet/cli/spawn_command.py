@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import re
 
+from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_connect_arguments
 from armfleet.cli.fleet_runner import run_fleet
 from armfleet.cli.join_world import add_to_world, running_world
@@ -15,7 +16,6 @@ from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.description import ModelLibrary
 from armfleet.errors import UnknownModel
 from armfleet.names import ARM_NAME_PATTERN, check_arm_name
-from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.spawn_pose import AT_SYNTAX, SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
 from armfleet.spec.scene_rehearsal import rehearse

@@ -31,6 +31,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from armfleet.checks.real_numbers import all_real
 from armfleet.controllers.controller import Controller
 from armfleet.controllers.jerk_limited_trajectory import (
     JerkLimitedTrajectory,
@@ -49,7 +50,6 @@ from armfleet.errors import (
 )
 from armfleet.joint_memory import JointViews, Row
 from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
-from armfleet.real_numbers import all_real
 
 logger = logging.getLogger("armfleet")
 

@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from armfleet.checks.user_paths import file_problem
 from armfleet.messages import FloatArray
-from armfleet.user_paths import file_problem
 
 MESH_SUFFIXES = (".obj", ".stl")
 #: Most triangles a mesh object may have (see the module's measurements).

@@ -17,12 +17,12 @@ from typing import Any
 
 import numpy as np
 
+from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
+from armfleet.checks.real_numbers import is_real, is_real_vector
 from armfleet.errors import ObjectError
 from armfleet.messages import FloatArray
 from armfleet.names import RESERVED_NAMES, name_problem
-from armfleet.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.objects.mesh_file import MESH_SUFFIXES, mesh_extents
-from armfleet.real_numbers import is_real, is_real_vector
 
 #: Lateral (Coulomb) friction coefficient of an object unless given.
 DEFAULT_FRICTION = 0.8

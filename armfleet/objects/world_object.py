@@ -15,12 +15,12 @@ import numpy as np
 import pinocchio as pin
 import pybullet as p
 
+from armfleet.checks.real_numbers import is_real_vector
 from armfleet.errors import ObjectError, UnknownObject
 from armfleet.lifetime import Lifetime, while_alive
 from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import ObjectSpec, Shape, pose_matrix
-from armfleet.real_numbers import is_real_vector
 
 
 class WorldObject:

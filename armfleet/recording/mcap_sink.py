@@ -24,10 +24,10 @@ from typing import Any
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
 
+from armfleet.checks.user_paths import file_problem
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.interrupts import deferred_interrupts
 from armfleet.recording.schemas import MessageSchema
-from armfleet.user_paths import file_problem
 
 #: Uncompressed size at which a chunk is compressed and written [bytes].
 CHUNK_BYTES = 1024 * 1024

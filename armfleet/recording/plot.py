@@ -7,10 +7,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from armfleet.checks.user_paths import given_path
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.reader import Recording
 from armfleet.recording.tracking_data import TrackingData, plottable_arms, tracking_data
-from armfleet.user_paths import given_path
 
 #: File types ``plot`` writes.
 FORMATS = (".png", ".svg", ".pdf")

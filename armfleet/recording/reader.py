@@ -24,6 +24,7 @@ from mcap.records import Attachment, Channel, Message, Metadata, Schema
 from mcap.summary import Summary
 from mcap.well_known import MessageEncoding
 
+from armfleet.checks.user_paths import file_problem, given_path
 from armfleet.recording.arm_record import (
     ARM_METADATA,
     REMOVED_METADATA,
@@ -40,7 +41,6 @@ from armfleet.recording.errors import (
 )
 from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan, ScanResult
 from armfleet.recording.recorder import SPEC_ATTACHMENT
-from armfleet.user_paths import file_problem, given_path
 
 NS_PER_S = 1e9
 CHUNK_OPCODE = bytes([Opcode.CHUNK])

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from armfleet.bringup import BRINGUP_TOPIC
+from armfleet.checks.user_paths import given_path
 from armfleet.errors import WorldClosed
 from armfleet.messages import ArmStatus, BringupEvent, BringupStage
 from armfleet.recording.arm_record import (
@@ -50,7 +51,6 @@ from armfleet.recording.encode import MessageEncoder, StringEncoder, encoder_for
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.mcap_sink import CHUNK_BYTES, McapSink
 from armfleet.recording.spec_snapshot import spec_text
-from armfleet.user_paths import given_path
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm

@@ -30,6 +30,7 @@ from typing import IO
 from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema
 from mcap.writer import CompressionType, Writer
 
+from armfleet.checks.user_paths import file_problem, given_path
 from armfleet.recording.errors import (
     DamagedRecording,
     NotARecording,
@@ -38,7 +39,6 @@ from armfleet.recording.errors import (
 )
 from armfleet.recording.mcap_sink import CHUNK_BYTES
 from armfleet.recording.record_scan import MCAP_MAGIC, FileEnd, RecordScan
-from armfleet.user_paths import file_problem, given_path
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, cast
 
 from armfleet.bus import Bus
+from armfleet.checks.user_paths import given_path
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError
 from armfleet.messages import JointCommand
@@ -33,7 +34,6 @@ from armfleet.recording.replay_stream import (
     TargetSent,
     replay_events,
 )
-from armfleet.user_paths import given_path
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm

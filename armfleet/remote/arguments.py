@@ -7,7 +7,7 @@ import math
 from collections.abc import Collection
 from typing import Any
 
-from armfleet.number_ranges import NumberRange
+from armfleet.checks.number_ranges import NumberRange
 from armfleet.remote.errors import ProtocolError
 
 _MISSING = object()
@@ -85,7 +85,7 @@ class Arguments:
         return float(value)
 
     def in_range(self, key: str, default: Any, valid: NumberRange) -> Any:
-        """A number in one of the ranges of :mod:`armfleet.number_ranges` (the same
+        """A number in one of the ranges of :mod:`armfleet.checks.number_ranges` (the same
         range the command line checks); ``default`` if absent (required if ``_MISSING``)."""
         value = self._get(key, default)
         if value is default:

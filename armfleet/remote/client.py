@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import zmq
 
-from armfleet import number_ranges
+from armfleet.checks import number_ranges
 from armfleet.errors import ArmfleetError
 from armfleet.messages import FloatArray, JointCommand, Positions
 from armfleet.remote import runtime_file

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import enum
 
-from armfleet.number_ranges import REQUEST_TIMEOUT_S
+from armfleet.checks.number_ranges import REQUEST_TIMEOUT_S
 
 #: Bumped on any incompatible change; ``hello`` refuses a client speaking another one.
 PROTOCOL_VERSION = 1

@@ -7,11 +7,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from armfleet import number_ranges
+from armfleet.checks import number_ranges
+from armfleet.checks.flags import flag
+from armfleet.checks.real_numbers import all_real
 from armfleet.errors import ArmfleetError, NoGripper
-from armfleet.flags import flag
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
-from armfleet.real_numbers import all_real
 from armfleet.remote.codec import decode_message
 from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.spawn_pose import SpawnPose

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from armfleet import number_ranges
+from armfleet.checks import number_ranges
+from armfleet.checks.real_numbers import real_number
 from armfleet.messages import GripperMode, GripperState
-from armfleet.real_numbers import real_number
 from armfleet.remote.codec import decode_message
 
 if TYPE_CHECKING:

@@ -25,9 +25,9 @@ from typing import Any
 
 import zmq
 
+from armfleet.checks.flags import flag
+from armfleet.checks.number_ranges import REQUEST_TIMEOUT_S, WAIT_TIMEOUT_S
 from armfleet.errors import ArmfleetError
-from armfleet.flags import flag
-from armfleet.number_ranges import REQUEST_TIMEOUT_S, WAIT_TIMEOUT_S
 from armfleet.remote import runtime_file
 from armfleet.remote.address import DEFAULT_BIND, bind_endpoint, check_bind_host, is_loopback
 from armfleet.remote.arguments import Arguments

@@ -14,10 +14,10 @@ from typing import Any
 
 from armfleet.arm import Arm
 from armfleet.bus import Subscription
+from armfleet.checks.number_ranges import STEP_COUNT
 from armfleet.errors import ArmFault, ArmfleetError, ProtectiveStopError
 from armfleet.launch import spawn_from_spec
 from armfleet.messages import ArmMode, JointCommand
-from armfleet.number_ranges import STEP_COUNT
 from armfleet.remote.arguments import Arguments
 from armfleet.remote.codec import to_wire
 from armfleet.remote.errors import UnknownService, UnknownTopic

@@ -30,6 +30,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from armfleet.checks.time_step import MAX_DT_S, MIN_DT_S
+from armfleet.checks.user_paths import file_problem, given_path
 from armfleet.controllers.parameters import check_parameter
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
@@ -43,8 +45,6 @@ from armfleet.spec.object_entries import read_objects
 from armfleet.spec.scene_rehearsal import LocatedRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
-from armfleet.time_step import MAX_DT_S, MIN_DT_S
-from armfleet.user_paths import file_problem, given_path
 
 TOP_KEYS = ("world", "arms", "grid", "objects")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")

@@ -24,7 +24,7 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from armfleet.flags import flag
+from armfleet.checks.flags import flag
 from armfleet.viewer.errors import ViewerError
 
 if TYPE_CHECKING:

@@ -16,7 +16,7 @@ Measured with ``python benchmarks/dt_limits.py``.
 
 from __future__ import annotations
 
-from armfleet.real_numbers import real_number
+from armfleet.checks.real_numbers import real_number
 
 #: Smallest physics step [s].
 MIN_DT_S = 1e-5

@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from armfleet.checks.real_numbers import is_real
 from armfleet.errors import InvalidNumber
-from armfleet.real_numbers import is_real
 
 
 @dataclass(frozen=True)
