@@ -296,7 +296,7 @@ BAD = [
     ),
     pytest.param(
         ["launch", "a" * 100_000],
-        ["cannot be read (File name too long)"],
+        ["cannot be opened (File name too long)"],
         id="launch with a 100 kB name -> one short line (not an OSError traceback)",
     ),
     pytest.param(
