@@ -50,9 +50,9 @@ class StepGuard:
         self._in_step = False
         self._close_pending = False
 
-    @contextlib.contextmanager
-    def owned(self, call: str) -> Iterator[None]:
-        """Own the world for ``call`` (e.g. ``"spawn"``) in the calling thread.
+    def acquire(self, call: str) -> None:
+        """Own the world for ``call`` (e.g. ``"spawn"``) in the calling thread, until
+        the matching :meth:`release`.
 
         Raises:
             WorldBusy: another thread owns it, or the call comes from inside a step.
@@ -65,26 +65,35 @@ class StepGuard:
                 raise WorldBusy(call, "it was called from inside a step (a bus subscriber)")
             self._owner = me
             self._depth += 1
-        try:
-            yield
-        finally:
-            with self._lock:
-                self._depth -= 1
-                if self._depth == 0:
-                    self._owner = None
-                due = self._depth == 0 and self._close_pending
-                self._close_pending = self._close_pending and not due
-            if due:
-                self._close()
+
+    def release(self) -> None:
+        """End one :meth:`acquire`; the outermost one closes the world if a close was put off."""
+        with self._lock:
+            self._depth -= 1
+            if self._depth == 0:
+                self._owner = None
+            due = self._depth == 0 and self._close_pending
+            self._close_pending = self._close_pending and not due
+        if due:
+            self._close()
 
     @contextlib.contextmanager
-    def stepping(self) -> Iterator[None]:
-        """Mark the body of a step, where subscribers run and the world must not change."""
-        self._in_step = True
+    def owned(self, call: str) -> Iterator[None]:
+        """:meth:`acquire` for ``call`` around a ``with`` block, then :meth:`release`."""
+        self.acquire(call)
         try:
             yield
         finally:
-            self._in_step = False
+            self.release()
+
+    def begin_step(self) -> None:
+        """Mark the start of a step's body, where subscribers run and the world must not
+        change; :meth:`end_step` ends it. (Two plain calls, not a context manager: this
+        runs at every physics step.)"""
+        self._in_step = True
+
+    def end_step(self) -> None:
+        self._in_step = False
 
     @contextlib.contextmanager
     def closing(self) -> Iterator[bool]:
@@ -136,9 +145,15 @@ G = TypeVar("G", bound=Guarded)
 def owning(method: Callable[Concatenate[G, P], R]) -> Callable[Concatenate[G, P], R]:
     """Wrap a world's ``method`` so it runs owning the world (see :meth:`StepGuard.owned`)."""
 
+    call = method.__name__
+
     @functools.wraps(method)
     def owned(self: G, /, *args: P.args, **kwargs: P.kwargs) -> R:
-        with self.step_guard.owned(method.__name__):
+        guard = self.step_guard
+        guard.acquire(call)
+        try:
             return method(self, *args, **kwargs)
+        finally:
+            guard.release()
 
     return owned

@@ -441,7 +441,8 @@ class World:
         self._requests.drain()
         if self.closed:  # a request closed it
             return
-        with self._guard.stepping():  # subscribers run from here on: WorldBusy if they step
+        self._guard.begin_step()  # subscribers run from here on: WorldBusy if they step
+        try:
             stamp = self.time
             self._controllers.update(stamp, self._step_index)
             self._memory.write()
@@ -456,6 +457,8 @@ class World:
                     self._publish_status(arm)
             if self._viewer is not None:
                 self._viewer.tick(self)
+        finally:
+            self._guard.end_step()
 
     @property
     def safety(self) -> SafetySupervisor:
