@@ -233,3 +233,30 @@ class GripperState:
     force: float
     mode: GripperMode
     holding: bool
+
+
+@dataclass(frozen=True)
+class PlannedMotion:
+    """Published on ``/<arm>/planned_motion`` when a collision-free plan starts on the arm
+    (a ``moveit_msgs/DisplayTrajectory`` in spirit): the path it will follow.
+
+    Attributes:
+        stamp: simulated time the motion starts [s].
+        name: the arm's controlled joint names (``Arm.joint_names``).
+        time_from_start: time of each waypoint after ``stamp`` [s]; the last is the duration.
+        positions: waypoints (rows) of the joint path, one column per joint [rad or m];
+            between two waypoints the joints move in a straight line.
+        tool_path: world positions (rows, x y z [m]) of the arm's tool0 along the motion,
+            from start to goal, for drawing.
+    """
+
+    stamp: float
+    name: tuple[str, ...]
+    time_from_start: tuple[float, ...]
+    positions: FloatArray
+    tool_path: FloatArray
+
+    @property
+    def duration(self) -> float:
+        """How long the motion lasts [s]."""
+        return self.time_from_start[-1] if self.time_from_start else 0.0
