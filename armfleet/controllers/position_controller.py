@@ -49,7 +49,13 @@ from armfleet.errors import (
     TargetTypeError,
 )
 from armfleet.joint_memory import JointViews, Row
-from armfleet.messages import ControllerState, FloatArray, JointCommand, Positions
+from armfleet.messages import (
+    ControllerState,
+    FloatArray,
+    JointCommand,
+    PlannedMotion,
+    Positions,
+)
 
 logger = logging.getLogger("armfleet")
 
@@ -123,6 +129,8 @@ class PositionController(Controller):
         self._state_topic = self.arm.topic("position_controller/state")
         self.arm.bus.advertise(self.arm.topic("position_controller/commands"), JointCommand)
         self.arm.bus.advertise(self._state_topic, ControllerState)
+        # Collision-free plans announce their path here as they start (armfleet.planning).
+        self.arm.bus.advertise(self.arm.topic("planned_motion"), PlannedMotion)
         # on_error: a command this controller failed to take faults its arm, not skipped.
         self._subscription = self.arm.bus.subscribe(
             self.arm.topic("position_controller/commands"), self._on_command, on_error=self.fail
