@@ -29,6 +29,7 @@ from armfleet.viewer.errors import ViewerError
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
+    from armfleet.messages import PlannedMotion
     from armfleet.objects import WorldObject
     from armfleet.viewer.arm_visual import ArmVisual
     from armfleet.viewer.commands import Updates
@@ -36,6 +37,7 @@ if TYPE_CHECKING:
     from armfleet.viewer.idle_refresher import IdleRefresher
     from armfleet.viewer.live_link import LiveLink
     from armfleet.viewer.object_visual import ObjectVisual
+    from armfleet.viewer.plan_lines import PlanLines
     from armfleet.viewer.recorder import Recorder
     from armfleet.viewer.scene import Stage
     from armfleet.viewer.server import ViewerServer
@@ -113,6 +115,7 @@ class Viewer:
 
         from armfleet.viewer.idle_refresher import IdleRefresher
         from armfleet.viewer.live_link import LiveLink
+        from armfleet.viewer.plan_lines import PlanLines
         from armfleet.viewer.recorder import Recorder
         from armfleet.viewer.scene import Stage
         from armfleet.viewer.server import ViewerServer
@@ -122,6 +125,7 @@ class Viewer:
         self._connection: BridgeConnection | None = None
         self._link: LiveLink | None = None
         self._refresher: IdleRefresher | None = None
+        self._plans: PlanLines | None = None
         self._visuals: dict[str, ArmVisual] = {}
         self._objects: dict[str, ObjectVisual] = {}
         self._recorder: Recorder = Recorder()
@@ -143,6 +147,7 @@ class Viewer:
             self._visualizer: Any = meshcat.Visualizer(window=self._connection)
             self._stage: Stage = Stage(self._visualizer)
             self._stage.frame([])
+            self._plans = PlanLines(self._visualizer)
             self._link = LiveLink(self._context, self._server.zmq_url)
             self._refresher = IdleRefresher(PAUSE_S, self._refresh_if_paused)
         except BaseException:
@@ -216,6 +221,8 @@ class Viewer:
                 )
                 self._visuals[arm.name] = visual
                 self._recorder.add(arm.name)
+                if self._plans is not None:
+                    self._plans.follow(arm)  # its planned motions, drawn while they run
                 self._frame_camera()
                 self._send_poses()  # at once: the simulation may not step again
         except ViewerError as exc:
@@ -228,6 +235,8 @@ class Viewer:
         with self._lock:
             visual = self._visuals.pop(name, None)
             self._recorder.remove(name)
+            if self._plans is not None:
+                self._plans.forget(name)  # its line goes with its node, below
             if visual is None:
                 return
             visual.close()
@@ -305,6 +314,9 @@ class Viewer:
             return
         if world.time >= self._recorder.next_time_s:
             self._record(world.time)
+        plans = self._plans
+        if plans is not None and plans.busy:
+            self._update_plans(plans, world.time)
         if time.perf_counter() >= self._next_display_s:
             self._display()
 
@@ -325,6 +337,19 @@ class Viewer:
             except ViewerError as exc:
                 self._fail(str(exc))
                 return False
+
+    @property
+    def planned_motions(self) -> dict[str, PlannedMotion]:
+        """The planned motions whose tool path is drawn now, by arm."""
+        return {} if self._plans is None else self._plans.shown
+
+    def _update_plans(self, plans: PlanLines, time_s: float) -> None:
+        """Draw the planned motions that started and remove those that ended."""
+        with self._lock:
+            try:
+                plans.update(time_s)
+            except ViewerError as exc:
+                self._fail(str(exc))
 
     def _record(self, time_s: float) -> None:
         positions = {name: visual.arm.body.position for name, visual in self._visuals.items()}
@@ -445,6 +470,8 @@ class Viewer:
             with self._lock:
                 for visual in self._visuals.values():
                     visual.close()
+                if self._plans is not None:
+                    self._plans.close()
                 if self._link is not None:
                     self._link.close()
             if self._connection is not None:
