@@ -21,6 +21,7 @@ import umsgpack
 from tornado.websocket import websocket_connect
 
 import armfleet
+from armfleet.messages import PlannedMotion
 
 Matrix = np.ndarray
 
@@ -73,6 +74,44 @@ def tool0_pose(arm: armfleet.Arm, arm_positions: Any = None) -> Matrix:
     pin.framesForwardKinematics(model, data, q)
     pose: Matrix = data.oMf[model.getFrameId(arm.description.tool0)].homogeneous
     return pose
+
+
+def straight_plan(
+    world: armfleet.World, arm: armfleet.Arm, goal: Any, waypoints: int = 25
+) -> PlannedMotion:
+    """The :class:`PlannedMotion` of a straight joint move of ``arm`` to ``goal`` from where
+    its reference is, starting now: what the planner publishes for a path it found.
+
+    Its tool path is computed here, independently of the viewer, by Pinocchio
+    forward kinematics of the waypoints (:func:`tool0_pose`).
+    """
+    trajectory = arm.position_controller.trajectory
+    assert trajectory is not None
+    start = trajectory.position.copy()
+    duration = arm.position_controller.plan(goal).duration
+    share = np.linspace(0.0, 1.0, waypoints)
+    positions = start + share[:, None] * (np.asarray(goal, dtype=float) - start)
+    tool_path = np.array([tool0_pose(arm, q)[:3, 3] for q in positions])
+    return PlannedMotion(
+        world.time, arm.joint_names, tuple((share * duration).tolist()), positions, tool_path
+    )
+
+
+def start_planned_move(world: armfleet.World, arm: armfleet.Arm, goal: Any) -> PlannedMotion:
+    """As the planner starts a plan: publish it on ``/<arm>/planned_motion``, then start the
+    motion (here an ordinary ``move_to``, whose target is the plan's goal)."""
+    plan = straight_plan(world, arm, goal)
+    world.bus.publish(f"/{arm.name}/planned_motion", plan)
+    arm.move_to(goal)
+    return plan
+
+
+def line_vertices(command: dict[str, Any]) -> np.ndarray:
+    """The vertices (n x 3) of a MeshCat ``set_object`` of a line, as the page gets them."""
+    geometry = command["object"]["geometries"][0]["data"]["attributes"]["position"]
+    array = geometry["array"]
+    data = array.data if isinstance(array, umsgpack.Ext) else np.asarray(array, np.float32)
+    return np.frombuffer(bytes(data), dtype=np.float32).reshape(-1, geometry["itemSize"])
 
 
 @dataclass

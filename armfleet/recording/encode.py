@@ -22,12 +22,19 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from armfleet.messages import ControllerState, JointCommand, JointState, TFMessage
+from armfleet.messages import (
+    ControllerState,
+    JointCommand,
+    JointState,
+    PlannedMotion,
+    TFMessage,
+)
 from armfleet.recording.schemas import (
     CONTROLLER_STATE,
     FLOAT64_MULTI_ARRAY,
     JOINT_STATE,
     OWN_PACKAGE,
+    PLANNED_MOTION,
     STRING,
     TF_MESSAGE,
     MessageSchema,
@@ -324,6 +331,83 @@ class StringEncoder:
         return dumps({"data": message})
 
 
+# -- armfleet_msgs/msg/PlannedMotion ----------------------------------------------------
+#: Frame of a planned motion's tool path.
+WORLD_FRAME = "world"
+
+
+class PlannedMotionEncoder:
+    """``PlannedMotion`` -> ``armfleet_msgs/msg/PlannedMotion``: its joint path as a ROS
+    ``trajectory_msgs/msg/JointTrajectory`` and its tool path as ``geometry_msgs/msg/Point``s
+    (see :data:`~armfleet.recording.schemas.PLANNED_MOTION`).
+
+    A waypoint holding a position that is not finite is written with empty positions,
+    one whose time is not finite is left out, and a tool path holding such a value is
+    written empty. A stamp that is not finite cannot be written (the recorder skips the
+    message).
+    """
+
+    schema = PLANNED_MOTION
+
+    def __call__(self, message: PlannedMotion) -> bytes:
+        stamp = float(message.stamp)
+        if not math.isfinite(stamp):
+            raise ValueError(f"the stamp {stamp} is not finite")
+        names = [str(name) for name in message.name]
+        rows = np.asarray(message.positions, dtype=float).reshape(-1, len(names) or 1)
+        points = []
+        for row, time_s in zip(rows, message.time_from_start, strict=False):
+            if not math.isfinite(time_s):
+                continue
+            sec, nanosec = _stamp(float(time_s))
+            points.append(
+                {
+                    "positions": finite_or_empty(row),
+                    "velocities": [],
+                    "accelerations": [],
+                    "effort": [],
+                    "time_from_start": {"sec": sec, "nanosec": nanosec},
+                }
+            )
+        tool = np.asarray(message.tool_path, dtype=float)
+        tool_path = []
+        if tool.ndim == 2 and tool.shape[1] == 3 and np.isfinite(tool).all():
+            tool_path = [{"x": x, "y": y, "z": z} for x, y, z in tool.tolist()]
+        return dumps(
+            {
+                "header": header(stamp, WORLD_FRAME),
+                "trajectory": {"header": header(stamp), "joint_names": names, "points": points},
+                "tool_path": tool_path,
+            }
+        )
+
+
+def planned_motion(message: dict[str, Any]) -> PlannedMotion:
+    """The :class:`PlannedMotion` of a recorded ``armfleet_msgs/msg/PlannedMotion``.
+
+    Positions written empty read back as NaN (:func:`numbers_or_nan`).
+
+    Raises:
+        KeyError, TypeError, ValueError: ``message`` is not shaped like the schema.
+    """
+    stamp = message["header"]["stamp"]
+    trajectory = message["trajectory"]
+    names = tuple(str(name) for name in trajectory["joint_names"])
+    points = trajectory["points"]
+    times = tuple(
+        p["time_from_start"]["sec"] + p["time_from_start"]["nanosec"] / NS_PER_S for p in points
+    )
+    positions = np.array(
+        [numbers_or_nan(p["positions"], len(names)) for p in points], dtype=float
+    ).reshape(len(points), len(names))
+    tool_path = np.array(
+        [(p["x"], p["y"], p["z"]) for p in message["tool_path"]], dtype=float
+    ).reshape(-1, 3)
+    return PlannedMotion(
+        stamp["sec"] + stamp["nanosec"] / NS_PER_S, names, times, positions, tool_path
+    )
+
+
 # -- anything else -----------------------------------------------------------------------
 class _NotFinite:
     """What :func:`plain` returns for a value holding a non-finite number."""
@@ -404,6 +488,7 @@ _ROS_ENCODERS: dict[type, Callable[[], MessageEncoder]] = {
     ControllerState: ControllerStateEncoder,
     TFMessage: TFMessageEncoder,
     JointCommand: JointCommandEncoder,
+    PlannedMotion: PlannedMotionEncoder,
 }
 
 

@@ -12,6 +12,7 @@ The viewer takes arms and ticks as a world gives them (``add_arm(arm)``,
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Callable
@@ -31,6 +32,7 @@ from armfleet.recording.replay_stream import (
     ArmRemoved,
     JointPositions,
     MotionChanged,
+    PlanStarted,
     TargetSent,
     replay_events,
 )
@@ -122,14 +124,14 @@ class ReplayPlayer:
             replay_time = max(0.0, (event.time_ns - start_ns) / 1e9)
             if speed is not None:
                 _sleep_until(wall_start + replay_time / speed)
-            self._apply(event)
+            self._apply(event, replay_time)
             self.clock.time = replay_time
             self._target.tick(world)
             if on_event is not None:
                 on_event(replay_time)
         return self.clock.time
 
-    def _apply(self, event: Any) -> None:
+    def _apply(self, event: Any, replay_time: float) -> None:
         if isinstance(event, JointPositions):
             arm = self.arms.get(event.arm) or self._waiting.pop(event.arm, None)
             if arm is None:
@@ -153,6 +155,10 @@ class ReplayPlayer:
             if event.arm in self.arms:
                 topic = f"/{event.arm}/position_controller/commands"
                 self._bus.publish(topic, JointCommand(event.positions))
+        elif isinstance(event, PlanStarted):
+            if event.arm in self.arms:  # drawn by the viewer until it ends, as live
+                plan = dataclasses.replace(event.plan, stamp=replay_time)
+                self._bus.publish(f"/{event.arm}/planned_motion", plan)
         elif isinstance(event, MotionChanged):
             arm = self.arms.get(event.arm)
             if arm is not None:

@@ -2,20 +2,24 @@
 
 This is what a replay shows, read from the file without simulating anything:
 ``/<arm>/joint_states`` (positions), ``/<arm>/position_controller/commands``
-(targets), ``/<arm>/status`` (moving or not) and the arms' spawn and removal
-records. With ``rate_hz``, joint states are thinned to at most that rate per
-arm (the skipped ones are not even decoded); an arm's last state is always
-delivered.
+(targets), ``/<arm>/status`` (moving or not), ``/<arm>/planned_motion`` (the
+path of a planned motion as it starts) and the arms' spawn and removal records.
+With ``rate_hz``, joint states are thinned to at most that rate per arm (the
+skipped ones are not even decoded); an arm's last state is always delivered.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from armfleet.messages import PlannedMotion
 from armfleet.recording.arm_record import ArmRecord
-from armfleet.recording.encode import numbers_or_nan
+from armfleet.recording.encode import numbers_or_nan, planned_motion
 from armfleet.recording.reader import Recording
+
+logger = logging.getLogger("armfleet")
 
 NS_PER_S = 1_000_000_000
 
@@ -69,7 +73,16 @@ class MotionChanged:
     moving: bool
 
 
-ReplayEvent = ArmAppeared | ArmRemoved | JointPositions | TargetSent | MotionChanged
+@dataclass(frozen=True)
+class PlanStarted:
+    """A planned motion starts on an arm (its ``stamp`` is the recorded simulated time)."""
+
+    time_ns: int
+    arm: str
+    plan: PlannedMotion
+
+
+ReplayEvent = ArmAppeared | ArmRemoved | JointPositions | TargetSent | MotionChanged | PlanStarted
 
 
 def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterator[ReplayEvent]:
@@ -91,6 +104,7 @@ def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterato
         topics[f"/{name}/joint_states"] = (name, "state")
         topics[f"/{name}/position_controller/commands"] = (name, "command")
         topics[f"/{name}/status"] = (name, "status")
+        topics[f"/{name}/planned_motion"] = (name, "plan")
     period_ns = None if rate_hz is None else round(NS_PER_S / rate_hz)
     next_due: dict[str, int] = {}
     held: dict[str, tuple[int, bytes]] = {}  # an arm's newest state not delivered yet
@@ -115,6 +129,13 @@ def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterato
         elif kind == "command":
             message = recording.decode(topic, data)
             yield TargetSent(time_ns, name, tuple(float(v) for v in message["data"]))
+        elif kind == "plan":
+            try:
+                plan = planned_motion(recording.decode(topic, data))
+            except (KeyError, TypeError, ValueError) as exc:  # a file written elsewhere
+                logger.warning("replay: a planned motion of %s cannot be read: %s", name, exc)
+                continue
+            yield PlanStarted(time_ns, name, plan)
         else:
             message = recording.decode(topic, data)
             yield MotionChanged(time_ns, name, message.get("mode") == "moving")

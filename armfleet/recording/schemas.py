@@ -6,7 +6,10 @@ transforms of the 3D panel, ``sensor_msgs/msg/JointState`` for joint plots.
 Messages with no ROS counterpart (``/collisions``, ``/<arm>/status``,
 ``/bringup``) get a schema derived from their dataclass, named
 ``armfleet_msgs/msg/<Class>``, so a new message type is recorded without a
-change here.
+change here. ``/<arm>/planned_motion`` is the exception: its
+``armfleet_msgs/msg/PlannedMotion`` is written by hand from ROS parts (a
+``trajectory_msgs/msg/JointTrajectory`` and ``geometry_msgs/msg/Point``s), so
+ROS tools read its joint path.
 
 Conventions:
     * A ``stamp`` [s] becomes a ROS ``header`` whose ``stamp`` holds ``sec`` and
@@ -269,6 +272,57 @@ CONTROLLER_STATE = MessageSchema(
 )
 
 STRING = MessageSchema("std_msgs/msg/String", obj({"data": {"type": "string"}}))
+
+# -- a planned motion: a ROS JointTrajectory plus the tool path drawn for it -------------
+POINT = obj({"x": number(), "y": number(), "z": number()}, title="geometry_msgs/msg/Point")
+_WAYPOINT = obj(
+    {
+        "positions": numbers("[rad or m]"),
+        **{name: numbers("empty: not planned") for name in ("velocities", "accelerations")},
+        "effort": numbers("empty: not planned"),
+        "time_from_start": {**DURATION, "description": "time after header.stamp"},
+    },
+    title="trajectory_msgs/msg/JointTrajectoryPoint",
+    description="a waypoint; the joints move in a straight line between two",
+)
+JOINT_TRAJECTORY = obj(
+    {
+        "header": {**HEADER, "description": "stamp: when the motion starts (as in ROS)"},
+        "joint_names": strings("the arm's controlled joints"),
+        "points": {
+            "type": "array",
+            "items": _WAYPOINT,
+            "description": "a waypoint whose time is not finite is left out",
+        },
+    },
+    title="trajectory_msgs/msg/JointTrajectory",
+)
+#: ``/<arm>/planned_motion`` (:class:`armfleet.messages.PlannedMotion`). Not a
+#: ``moveit_msgs/msg/DisplayTrajectory``: that one has no place for the tool path and
+#: holds a robot state this message does not have; its joint path is a ROS
+#: ``trajectory_msgs/msg/JointTrajectory`` and its tool path ``geometry_msgs/msg/Point``s.
+PLANNED_MOTION = MessageSchema(
+    OWN_PACKAGE + "PlannedMotion",
+    obj(
+        {
+            "header": {
+                **HEADER,
+                "description": "stamp: when the motion starts; frame_id: that of tool_path",
+            },
+            "trajectory": JOINT_TRAJECTORY,
+            "tool_path": {
+                "type": "array",
+                "items": POINT,
+                "description": (
+                    "world positions [m] of the arm's tool0 along the motion, start to goal; "
+                    f"{EMPTY_IF_NOT_FINITE}"
+                ),
+            },
+        },
+        title=OWN_PACKAGE + "PlannedMotion",
+        description="a collision-free plan starting on an arm: the path it will follow",
+    ),
+)
 
 
 # -- armfleet's own messages, derived from their dataclasses -----------------------------
