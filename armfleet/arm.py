@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pinocchio as pin
 
@@ -14,10 +14,11 @@ from armfleet.checks.flags import flag
 from armfleet.checks.real_numbers import STAMP_VALID, real_number
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.controllers.gripper_controller import GripperController
-from armfleet.controllers.jerk_limited_trajectory import MotionPlan
+from armfleet.controllers.jerk_limited_trajectory import MotionPlan, SampledMotion
 from armfleet.description import ArmDescription
 from armfleet.errors import (
     ArmFault,
+    ArmfleetError,
     ArmInMotion,
     NoGripper,
     ProtectiveStopError,
@@ -25,7 +26,7 @@ from armfleet.errors import (
     UnreachablePose,
 )
 from armfleet.gripper import Gripper
-from armfleet.inverse_kinematics import InverseKinematics, link_frame, world_goal
+from armfleet.inverse_kinematics import InverseKinematics, is_pose, link_frame, world_goal
 from armfleet.kinematics import ArmKinematics
 from armfleet.lifetime import Lifetime, while_alive
 from armfleet.messages import (
@@ -34,11 +35,16 @@ from armfleet.messages import (
     FloatArray,
     JointCommand,
     JointState,
+    PlannedMotion,
     Positions,
 )
+from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
+
+if TYPE_CHECKING:
+    from armfleet.planning import MotionPlanner, Plan
 
 
 class Arm:
@@ -69,6 +75,7 @@ class Arm:
         gripper_controller: GripperController | None = None,
         frame_pose: Callable[[str], FloatArray] | None = None,
         lifetime: Lifetime | None = None,
+        planner: MotionPlanner | None = None,
     ) -> None:
         self._name = name
         #: Ended when the arm leaves its world (or the world closes).
@@ -93,6 +100,8 @@ class Arm:
         self._frame_pose = frame_pose
         self._ik = InverseKinematics(kinematics)
         self._linear = LinearPathPlanner(name, self._ik, position_controller)
+        #: The world's collision-free planner (None for an arm outside a world).
+        self._planner = planner
 
     # -- what a handle is: readable after close or remove ------------------------------
     @property
@@ -253,17 +262,31 @@ class Arm:
         self._safety.reset_stop(self)
 
     @while_alive
-    def move_to(self, positions: Positions) -> float:
+    def move_to(
+        self,
+        positions: Positions,
+        *,
+        avoid_collisions: bool = False,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+    ) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
 
         Returns the planned duration of the motion [s].
 
-        The command goes out on ``/<name>/position_controller/commands``.
+        The command goes out on ``/<name>/position_controller/commands``. With
+        ``avoid_collisions=True`` the arm goes around everything in the world instead
+        of in a straight line, keeping ``clearance_m`` from other bodies (see
+        :meth:`plan`); it must be at rest.
 
         Raises:
             TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError,
             ProtectiveStopError, ArmFault: nothing is sent and the current motion goes on.
+            PlanningFailed, ArmInMotion: with ``avoid_collisions``; nothing moves.
         """
+        if flag(avoid_collisions, "avoid_collisions"):
+            plan = self.plan(positions, clearance_m=clearance_m, timeout_s=timeout_s)
+            return self._world_planner().execute(plan)
         values = self._position_controller.validate(positions)
         if self._controller_manager.fault is not None:
             raise ArmFault(self._name, self._controller_manager.fault)
@@ -277,6 +300,64 @@ class Arm:
         step (e.g. with a minimum duration, by :meth:`armfleet.World.move_together`)."""
         self._publish_command(values)  # for the record; the plan replaces its motion
         self._position_controller.follow(plan)
+
+    @while_alive
+    def plan(
+        self,
+        target: Any,
+        frame: str = "world",
+        *,
+        link: str = "tool0",
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+    ) -> Plan:
+        """A collision-free motion to ``target``, without moving (``world.execute(plan)``).
+
+        Args:
+            target: joint positions (one per :attr:`joint_names`), or a pose (4x4 or
+                ``pinocchio.SE3``) of ``link`` in ``frame``, as :meth:`move_to_pose`.
+            frame, link: for a pose target.
+            clearance_m: margin kept from other bodies [m], in [0.001, 0.5].
+            timeout_s: time budget [s].
+
+        Every other arm is an obstacle where it is; one that is moving is checked in
+        time, along its remaining motion. See :mod:`armfleet.planning`.
+
+        Raises:
+            PlanningFailed: the start or goal is in collision (the links named), the
+                pose is unreachable, or no path was found in ``timeout_s``.
+            ArmInMotion, ArmFault, ProtectiveStopError, and the target errors of
+            :meth:`move_to` and :meth:`solve_ik`.
+        """
+        from armfleet.planning import PoseGoal
+
+        goal = PoseGoal(target, frame, link) if is_pose(target) else target
+        return self._world_planner().plan(
+            {self._name: goal}, clearance_m=clearance_m, timeout_s=timeout_s
+        )
+
+    def _world_planner(self) -> MotionPlanner:
+        if self._planner is None:
+            raise ArmfleetError(f"{self._name} is not in a world that plans")
+        return self._planner
+
+    def publish_planned(self, motion: PlannedMotion) -> None:
+        """Announce a planned motion on ``/<name>/planned_motion`` (the planner does)."""
+        self._bus.publish(f"{self.namespace}/planned_motion", motion)
+
+    def follow_motion(self, motion: SampledMotion) -> None:
+        """Follow ``motion`` (one row per controller period) from the next step, its last
+        row published as the command for the record (the planner does this)."""
+        self._position_controller.check_samples(motion)
+        self._publish_command(motion.position[-1])
+        self._position_controller.follow_samples(motion)
+
+    def tool_position(self, positions: FloatArray) -> FloatArray:
+        """World position of tool0 with the arm joints at ``positions`` [m]."""
+        q = self._body.position.copy()
+        q[self._kinematics.arm_indices] = positions
+        position: FloatArray = self._ik.frame_pose(self._description.tool0, q).translation.copy()
+        return position
 
     def _publish_command(self, values: FloatArray) -> None:
         self._bus.publish(
@@ -320,20 +401,37 @@ class Arm:
 
     @while_alive
     def move_to_pose(
-        self, pose: Any, frame: str = "world", *, link: str = "tool0", linear: bool = False
+        self,
+        pose: Any,
+        frame: str = "world",
+        *,
+        link: str = "tool0",
+        linear: bool = False,
+        avoid_collisions: bool = False,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
     ) -> float:
         """Move ``link`` to ``pose`` (in ``frame``); returns at once the planned duration [s].
 
         With ``linear=True`` the link goes in a straight line from where it is
         (its orientation turning about one axis), jerk-limited and within the
-        joint limits; the arm must be at rest. On any error nothing moves and
-        the current motion goes on.
+        joint limits; the arm must be at rest. With ``avoid_collisions=True`` the
+        arm goes around everything in the world (see :meth:`plan`). On any error
+        nothing moves and the current motion goes on.
 
         Raises:
             UnreachablePose, ArmInMotion, and the errors of :meth:`solve_ik` and
-            :meth:`move_to`.
+            :meth:`move_to`; PlanningFailed with ``avoid_collisions``.
         """
         linear = flag(linear, "linear")
+        if flag(avoid_collisions, "avoid_collisions"):
+            if linear:
+                raise ArmfleetError(
+                    f"{self._name}: choose linear=True (a straight tool line) or "
+                    "avoid_collisions=True (a planned path around obstacles), not both"
+                )
+            plan = self.plan(pose, frame, link=link, clearance_m=clearance_m, timeout_s=timeout_s)
+            return self._world_planner().execute(plan)
         if self._controller_manager.fault is not None:
             raise ArmFault(self._name, self._controller_manager.fault)
         controller = self._position_controller

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from armfleet.arm import Arm
 from armfleet.bus import Bus
@@ -29,6 +29,9 @@ from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
 from armfleet.start_clearance import Neighbour, load_clear_body
+
+if TYPE_CHECKING:
+    from armfleet.planning import MotionPlanner
 
 ControllerOverrides = Mapping[str, Mapping[str, Any]]
 
@@ -123,6 +126,7 @@ def assemble_arm(
     frame_pose: Callable[[str], FloatArray] | None = None,
     lifetime: Lifetime | None = None,
     neighbours: Iterable[Neighbour] = (),
+    planner: MotionPlanner | None = None,
 ) -> Arm:
     """Load the body (brakes on, at ``start``) and configure its controllers.
 
@@ -132,6 +136,7 @@ def assemble_arm(
     ``frame_pose`` gives the world pose (4x4) of any frame the world knows
     (e.g. ``world.tf.world_pose``): Cartesian goals may be given in them.
     ``lifetime`` is the arm's (see :mod:`armfleet.lifetime`), ended by the world.
+    ``planner`` plans its collision-free motions (the world's).
 
     Both parameter sets are validated before the arm is returned; on any error
     the body is removed again and the world is as it was.
@@ -174,5 +179,5 @@ def assemble_arm(
     publisher = RobotStatePublisher(name, kinematics, bus, stamp)
     return Arm(
         name, pose, description, body, kinematics, bus, manager, broadcaster, controller,
-        publisher, safety, gripper, frame_pose, lifetime,
+        publisher, safety, gripper, frame_pose, lifetime, planner,
     )  # fmt: skip

@@ -45,6 +45,11 @@ _STALL_ITERATIONS = 10
 _NULL_SPACE_ERROR = 1e-4
 
 
+def is_pose(target: Any) -> bool:
+    """Whether ``target`` is a pose (4x4 or ``pinocchio.SE3``) rather than joint positions."""
+    return isinstance(target, pin.SE3) or np.ndim(target) == 2
+
+
 def as_se3(pose: Any) -> pin.SE3:
     """``pose`` (a 4x4 homogeneous matrix or a ``pinocchio.SE3``) as an SE3.
 

@@ -13,11 +13,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-import pinocchio as pin
-
 from armfleet.controllers.jerk_limited_trajectory import MotionPlan, TrajectoryError
 from armfleet.errors import ArmFault, ArmfleetError
+from armfleet.inverse_kinematics import is_pose
 from armfleet.messages import FloatArray
 
 if TYPE_CHECKING:
@@ -31,7 +29,7 @@ _ROUNDS = 10
 def joint_target(arm: Arm, target: Any) -> FloatArray:
     """``target`` as arm joint positions: joint positions as they are, a 4x4 pose
     (or ``pinocchio.SE3``) of tool0 in the world through IK."""
-    if isinstance(target, pin.SE3) or np.ndim(target) == 2:
+    if is_pose(target):
         return arm.solve_ik(target)
     return arm.position_controller.validate(target)
 

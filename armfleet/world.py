@@ -31,6 +31,7 @@ from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError, NameInUse, UnknownArm, WorldClosed
 from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.ground import create_ground
+from armfleet.inverse_kinematics import is_pose
 from armfleet.joint_memory import JointMemory
 from armfleet.kinematics import ArmKinematics
 from armfleet.lifetime import Lifetime
@@ -49,6 +50,8 @@ from armfleet.objects.object_spec import (
     DEFAULT_ROLLING_FRICTION_M,
     DEFAULT_SPINNING_FRICTION_M,
 )
+from armfleet.planning import MotionPlanner, Plan, PoseGoal
+from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
 from armfleet.spawn_pose import SpawnPose
@@ -124,6 +127,12 @@ class World:
         self._status_period_steps = max(1, round(STATUS_PERIOD_S / dt))
         self._requests = RequestQueue()
         self._guard = StepGuard(self.close)  # one thread at a time, never inside a step
+        self._planner = MotionPlanner(
+            lambda: self._arms,
+            lambda: self._objects.objects,
+            self._contacts.touching_bodies,
+            lambda: self.time,
+        )
         self._viewer: Viewer | None = None
         self.viewer_error: str | None = None
         if viewer:
@@ -212,25 +221,90 @@ class World:
             raise UnknownArm(name, list(self._arms))
         return self._arms[name]
 
-    def move_together(self, targets: Mapping[str, Positions | Any]) -> float:
+    def move_together(
+        self,
+        targets: Mapping[str, Positions | Any],
+        *,
+        avoid_collisions: bool = False,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+    ) -> float:
         """Move several arms so they start on the same step and finish at the same instant.
 
         Args:
-            targets: per arm name, joint positions (one per ``arm.joint_names``)
-                or a 4x4 world pose of its tool0 (solved by IK).
+            targets: per arm name, joint positions (one per ``arm.joint_names``),
+                a 4x4 world pose of its tool0 (solved by IK), or a
+                :class:`~armfleet.planning.PoseGoal` (any link, any frame).
+            avoid_collisions: plan the arms jointly, in their combined joint space,
+                around each other and everything else (see :meth:`plan`), instead of
+                each in a straight line.
+            clearance_m, timeout_s: of the plan, with ``avoid_collisions``.
 
         Returns:
             The common duration [s]: the longest of the arms' own fastest motions.
 
         Raises:
             ArmfleetError: an unknown arm or any bad target; then no arm moves.
+            PlanningFailed: with ``avoid_collisions``, no plan; then no arm moves.
         """
         self._check_open()
         if not isinstance(targets, Mapping):
             raise ArmfleetError(
                 f"move_together takes a mapping {{arm name: target}}, got {type(targets).__name__}"
             )
+        if flag(avoid_collisions, "avoid_collisions"):
+            plan = self.plan(targets, clearance_m=clearance_m, timeout_s=timeout_s)
+            return self._planner.execute(plan)
         return move_together({name: (self.arm(name), t) for name, t in targets.items()})
+
+    def plan(
+        self,
+        targets: Mapping[str, Positions | Any],
+        *,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+    ) -> Plan:
+        """A collision-free motion of the named arms, planned jointly, without moving.
+
+        Args:
+            targets: per arm name, as :meth:`move_together` takes them.
+            clearance_m: margin kept between different bodies [m], in [0.001, 0.5].
+            timeout_s: time budget of the request [s].
+
+        Returns:
+            The :class:`~armfleet.planning.Plan`: its path, duration, planning time and
+            collision checks; run it with :meth:`execute`.
+
+        Raises:
+            PlanningFailed: start or goal in collision (the links named), a pose goal
+                unreachable, or no path within ``timeout_s``; ``blocking_arm`` names a
+                moving arm that was in the way.
+            ArmfleetError: an unknown arm, a moving or stopped arm, a bad target.
+        """
+        self._check_open()
+        if not isinstance(targets, Mapping):
+            raise ArmfleetError(
+                f"plan takes a mapping {{arm name: target}}, got {type(targets).__name__}"
+            )
+        goals = {name: self._goal(name, target) for name, target in targets.items()}
+        return self._planner.plan(goals, clearance_m=clearance_m, timeout_s=timeout_s)
+
+    def _goal(self, name: str, target: Any) -> Any:
+        if is_pose(target):
+            return PoseGoal(target)
+        return target
+
+    def execute(self, plan: Plan) -> float:
+        """Start ``plan`` on its arms, all on the next step; returns its duration [s].
+
+        A plan made at an earlier step is checked again against the world as it is.
+
+        Raises:
+            ArmfleetError: the arms are not where the plan starts, or the world changed
+                so that the plan is no longer clear; nothing moves.
+        """
+        self._check_open()
+        return self._planner.execute(plan)
 
     # -- bring-up ---------------------------------------------------------------------
     @owning
@@ -296,6 +370,7 @@ class World:
             frame_pose=self._tf.world_pose,
             neighbours=self._contacts.neighbours(),
             lifetime=Lifetime(lambda: UnknownArm(name, list(self._arms)), self._lifetime),
+            planner=self._planner,
         )
         self._arms[name] = arm
         self._frames.claim(FrameOwner.arm(name), frames)

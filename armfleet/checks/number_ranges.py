@@ -106,3 +106,9 @@ WORLD_COORDINATE_M = NumberRange(-1000.0, 1000.0, "metres")
 ANGLE_DEG = NumberRange(-360.0, 360.0, "degrees")
 #: Replay speed, times real time.
 REPLAY_SPEED = NumberRange(0.001, 1000.0, "a factor (times real time)")
+
+#: The margin a collision-free plan keeps between different bodies [m]: above 0 (a
+#: plan is proven clear by it), at most half a metre (more leaves no room to move).
+CLEARANCE_M = NumberRange(0.001, 0.5, "metres")
+#: The time budget of one planning request [s].
+PLANNING_TIMEOUT_S = NumberRange(0.001, 60.0, "seconds")

@@ -160,6 +160,22 @@ class JerkLimitedTrajectory:
         start.target_acceleration = [0.0] * dofs
         return start
 
+    def remaining_positions(self, period: float) -> FloatArray:
+        """The reference positions (rows) at each coming ``period`` until the motion ends;
+        no rows when at rest. Reads the motion without advancing it."""
+        dofs = len(self.position)
+        if not self._moving:
+            return np.empty((0, dofs))
+        if self._samples is not None:
+            return np.array(self._samples.position[self._sample_index :], dtype=float)
+        trajectory = ruckig.Trajectory(dofs)
+        result = self._otg.calculate(self._input, trajectory)
+        if result not in (ruckig.Result.Working, ruckig.Result.Finished):
+            return np.array([self.position], dtype=float)
+        steps = max(1, int(np.ceil(trajectory.duration / period - 1e-9)))
+        times = np.minimum(np.arange(1, steps + 1) * period, trajectory.duration)
+        return np.array([trajectory.at_time(float(t))[0] for t in times], dtype=float)
+
     def follow(self, plan: MotionPlan) -> None:
         """Start following ``plan`` (made by :meth:`plan` from the current state)."""
         self._input = plan.input

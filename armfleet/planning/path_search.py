@@ -1,0 +1,114 @@
+"""From a :class:`PlanningProblem` to a proven-clear joint path, or a :class:`PlanningFailed`.
+
+1. The start and the goal must keep the clearance (else the pair is named).
+2. The straight line is tried first: if it is proven clear, it is the path.
+3. Otherwise the search (OMPL's RRT-Connect, then its simplifier) runs within the
+   time budget, and its path must pass :class:`PathCertifier`; a path that fails is
+   searched again, with motions checked finer, while time remains.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from armfleet.messages import FloatArray
+from armfleet.planning.failure import FailureReason, PlanningFailed
+from armfleet.planning.ompl_search import OmplRrtConnect
+from armfleet.planning.path_check import PathCertifier
+from armfleet.planning.problem import PlanningProblem
+
+
+@dataclass
+class JointPath:
+    """A path proven clear, and what finding it cost.
+
+    Attributes:
+        waypoints: states (rows) from start to goal; straight lines between them.
+        samples: states the search sampled (0 when the straight line was clear).
+        checks: collision checks made (search, simplification and proof).
+        seconds: wall time per phase [s]: ``check`` (start and goal), ``search``,
+            ``simplify``, ``certify``.
+    """
+
+    waypoints: FloatArray
+    samples: int = 0
+    checks: int = 0
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def length(self) -> float:
+        """Joint-space length [rad]."""
+        return float(np.sum(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1)))
+
+
+def find_path(problem: PlanningProblem, search: OmplRrtConnect | None = None) -> JointPath:
+    """A proven-clear path for ``problem``.
+
+    Raises:
+        PlanningFailed: the start or the goal is closer than the clearance to
+            something (the pair is named), or no proven-clear path was found in
+            ``problem.timeout_s``.
+    """
+    search = search or OmplRrtConnect()
+    checker = problem.checker
+    began = time.perf_counter()
+    deadline = began + problem.timeout_s
+    checks_before = checker.checks
+    for state, reason in (
+        (problem.start, FailureReason.START_IN_COLLISION),
+        (problem.goal, FailureReason.GOAL_IN_COLLISION),
+    ):
+        if not checker.valid(state):
+            raise _in_collision(problem, state, reason)
+    seconds = {"check": time.perf_counter() - began}
+    certifier = PathCertifier(checker)
+    straight = np.array([problem.start, problem.goal])
+    began = time.perf_counter()
+    if certifier.first_failure(straight) is None:
+        seconds["certify"] = time.perf_counter() - began
+        return JointPath(straight, 0, checker.checks - checks_before, seconds)
+    seconds["certify"] = time.perf_counter() - began
+    seconds["search"] = seconds["simplify"] = 0.0
+    samples, resolution = 0, search.resolution
+    while time.perf_counter() < deadline:
+        result = OmplRrtConnect(resolution).search(problem, deadline)
+        samples += result.samples
+        seconds["search"] += result.search_s
+        seconds["simplify"] += result.simplify_s
+        if result.path is None:
+            break
+        began = time.perf_counter()
+        failure = certifier.first_failure(result.path)
+        seconds["certify"] += time.perf_counter() - began
+        if failure is None:
+            return JointPath(result.path, samples, checker.checks - checks_before, seconds)
+        resolution /= 4.0  # its motions touched between checked states: check them finer
+    raise PlanningFailed(
+        FailureReason.NO_PATH,
+        f"no clear path within {problem.timeout_s:g} s ({samples} samples tried); "
+        "give more time (timeout_s), less clearance, or another goal",
+        arms=problem.arms,
+        samples=samples,
+        problem=problem,
+    )
+
+
+def _in_collision(
+    problem: PlanningProblem, state: FloatArray, reason: FailureReason
+) -> PlanningFailed:
+    found = problem.checker.collision(state)
+    if found is None:  # the broadphase and the pair-by-pair check disagree: say so plainly
+        return PlanningFailed(reason, "a pair is closer than its margin", arms=problem.arms)
+    first, second, distance = found
+    margin = problem.clearance_m
+    where = "touches" if distance <= 0.0 else f"is {distance * 1000:.1f} mm from"
+    return PlanningFailed(
+        reason,
+        f"{first} {where} {second} (clearance {margin * 1000:g} mm)",
+        arms=problem.arms,
+        links=(first, second),
+        problem=problem,
+    )

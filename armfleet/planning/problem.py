@@ -1,0 +1,67 @@
+"""A planning request made concrete, before any planner sees it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armfleet.messages import FloatArray
+from armfleet.planning.scene import CollisionChecker
+
+#: Default time budget of one request [s].
+DEFAULT_TIMEOUT_S = 1.0
+#: Default margin between different bodies [m].
+DEFAULT_CLEARANCE_M = 0.01
+
+
+@dataclass(frozen=True)
+class PlanningProblem:
+    """Move ``arms`` from ``start`` to ``goal`` without leaving the clearance.
+
+    The state is the arms' controlled joints (``Arm.joint_names``), concatenated in the
+    order of ``arms``; every other joint, arm and object stands where the scene has it.
+
+    Attributes:
+        arms: the planned arms.
+        start, goal: states [rad or m].
+        lower, upper: joint position limits of the state.
+        checker: collision checks against the scene snapshot taken for this request.
+        timeout_s: time budget of the search [s].
+    """
+
+    arms: tuple[str, ...]
+    start: FloatArray
+    goal: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    checker: CollisionChecker
+    timeout_s: float = DEFAULT_TIMEOUT_S
+
+    @property
+    def dimension(self) -> int:
+        return int(self.start.size)
+
+    @property
+    def clearance_m(self) -> float:
+        return self.checker.scene.clearance_m
+
+    def arm_slices(self) -> dict[str, slice]:
+        """Where each arm's joints are in a state."""
+        slices, offset = {}, 0
+        for arm in self.arms:
+            size = int(self.checker.scene.columns(arm).size)
+            slices[arm] = slice(offset, offset + size)
+            offset += size
+        return slices
+
+    def straight_length(self) -> float:
+        """Joint-space length of the straight line start -> goal [rad]."""
+        return float(np.linalg.norm(self.goal - self.start))
+
+    def __repr__(self) -> str:
+        return (
+            f"PlanningProblem(arms={self.arms}, start={np.round(self.start, 4).tolist()}, "
+            f"goal={np.round(self.goal, 4).tolist()}, clearance_m={self.clearance_m}, "
+            f"timeout_s={self.timeout_s})"
+        )

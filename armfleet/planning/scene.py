@@ -1,0 +1,369 @@
+"""The planning scene: every arm, object and the floor of a world as one Pinocchio model.
+
+The arms' Pinocchio models are appended into one model whose configuration is every
+arm's movable joints; their collision meshes become convex hulls (as PyBullet collides
+them), scene objects are coal boxes, cylinders, spheres and meshes, and the floor is a
+half-space at z = 0. A held object is attached to the joint of the hand that holds it.
+
+Which pairs count:
+
+- not two geometries of one rigid piece, nor of two pieces one joint apart (adjacent);
+- not pairs the arm's SRDF disables (``<disable_collisions>``);
+- not a held object against its gripper (the hand and the fingers);
+- and, per request (:meth:`PlanningScene.checker`), only pairs in which something moves
+  with the planned joints: two things that stand still cannot start to collide.
+
+Between different bodies a pair collides when closer than the clearance (coal's
+``security_margin``); within one arm when its geometries touch. Checks run in compiled
+code: Pinocchio's broadphase manager (a dynamic AABB tree) over the active pairs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import coal
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from armfleet.messages import FloatArray
+from armfleet.planning.object_geometry import convex_hull
+
+GROUND = "ground"
+#: Largest margin between two links of one arm [m] (the clearance, if smaller).
+SELF_CLEARANCE_M = 0.01
+
+
+@dataclass(frozen=True)
+class ArmGeometry:
+    """One arm's kinematics and collision geometry, ready to be appended into a scene.
+
+    Attributes:
+        name: arm name.
+        model: its Pinocchio model (root ``world`` frame renamed ``<name>__world``).
+        geometry: its collision geometry, meshes as convex hulls.
+        controlled_joints: the joints the planner moves (``Arm.joint_names``).
+        ignored_pairs: link pairs its SRDF disables.
+        hand_joint: the joint the fingers hang from (a held object is attached to it),
+            or None without a gripper.
+    """
+
+    name: str
+    model: pin.Model
+    geometry: pin.GeometryModel
+    controlled_joints: tuple[str, ...]
+    ignored_pairs: frozenset[frozenset[str]]
+    hand_joint: str | None
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """One object of the scene.
+
+    Attributes:
+        name: object name.
+        shape: its coal geometry.
+        placement: its pose in the world, or, when ``held_by`` is set, in the
+            frame of that arm's hand joint.
+        held_by: the arm whose gripper holds it, or None.
+    """
+
+    name: str
+    shape: coal.CollisionGeometry
+    placement: pin.SE3
+    held_by: str | None = None
+
+
+def arm_geometry(
+    name: str,
+    urdf: str,
+    model: pin.Model,
+    controlled_joints: Sequence[str],
+    ignored_pairs: Iterable[tuple[str, str]],
+    finger_joints: Sequence[str],
+) -> ArmGeometry:
+    """Build the collision geometry of one arm from the URDF text PyBullet loaded.
+
+    Args:
+        name: arm name.
+        urdf: its URDF text (absolute mesh paths).
+        model: its Pinocchio model (from the same text; copied, not changed).
+        controlled_joints: prefixed names of the joints planning moves.
+        ignored_pairs: link pairs whose contacts don't count (the SRDF's).
+        finger_joints: prefixed names of its finger joints (empty without a gripper).
+    """
+    own = model.copy()
+    for index, frame in enumerate(own.frames):
+        if frame.name in ("world", "universe"):
+            renamed = own.frames[index]
+            renamed.name = f"{name}__{frame.name}"
+            own.frames[index] = renamed
+    geometry = pin.buildGeomFromUrdfString(own, urdf, pin.GeometryType.COLLISION)
+    for item in geometry.geometryObjects:
+        if isinstance(item.geometry, coal.BVHModelBase):
+            item.geometry = convex_hull(item.geometry)
+    hand = None
+    if finger_joints:
+        hand = own.names[own.parents[own.getJointId(finger_joints[0])]]
+    return ArmGeometry(
+        name,
+        own,
+        geometry,
+        tuple(controlled_joints),
+        frozenset(frozenset(pair) for pair in ignored_pairs),
+        hand,
+    )
+
+
+class PlanningScene:
+    """A world's arms, objects and floor at one instant, for collision checks.
+
+    Args:
+        arms: the arms' geometries, in the world's order.
+        objects: the scene objects.
+        clearance_m: margin between different bodies [m].
+    """
+
+    def __init__(
+        self, arms: Sequence[ArmGeometry], objects: Sequence[SceneObject], clearance_m: float
+    ) -> None:
+        self.clearance_m = clearance_m
+        #: Margin between two links of one arm [m]: a margin on every pair is what lets
+        #: :mod:`armfleet.planning.path_check` prove a path contact-free.
+        self.self_clearance_m = min(clearance_m, SELF_CLEARANCE_M)
+        self.arm_names = tuple(arm.name for arm in arms)
+        model, geometry = pin.Model(), pin.GeometryModel()
+        for arm in arms:
+            model, geometry = pin.appendModel(
+                model, arm.model, geometry, arm.geometry, 0, pin.SE3.Identity()
+            )
+        self._arms = {arm.name: arm for arm in arms}
+        #: Per geometry: the body it belongs to (arm or object name, or ground).
+        owners = [self._arm_of(model, item.parentJoint) for item in geometry.geometryObjects]
+        geometry.addGeometryObject(
+            pin.GeometryObject(
+                GROUND, 0, pin.SE3.Identity(), coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0)
+            )
+        )
+        owners.append(GROUND)
+        for obj in objects:
+            joint = 0
+            if obj.held_by is not None:
+                hand = self._arms[obj.held_by].hand_joint
+                assert hand is not None  # only arms with a gripper hold things
+                joint = model.getJointId(hand)
+            item = pin.GeometryObject(obj.name, joint, obj.placement, obj.shape)
+            geometry.addGeometryObject(item)
+            owners.append(obj.name)
+        self.model, self.geometry = model, geometry
+        self._owners = owners
+        self._held = {obj.name: obj.held_by for obj in objects if obj.held_by is not None}
+        self._add_pairs()
+        self.data = model.createData()
+        self.geometry_data = geometry.createData()
+        for index, pair in enumerate(geometry.collisionPairs):
+            same_body = owners[pair.first] == owners[pair.second]
+            margin = self.self_clearance_m if same_body else clearance_m
+            self.geometry_data.collisionRequests[index].security_margin = margin
+        #: The configuration of every movable joint of every arm, where they are now.
+        self.positions = pin.neutral(model)
+        self._columns = {
+            arm.name: np.array(
+                [model.joints[model.getJointId(j)].idx_q for j in arm.controlled_joints]
+            )
+            for arm in arms
+        }
+        self._all_columns = {
+            arm.name: np.array(
+                [model.joints[model.getJointId(n)].idx_q for n in arm.model.names[1:]]
+            )
+            for arm in arms
+        }
+
+    # -- what the scene holds -------------------------------------------------------------
+    def columns(self, arm: str) -> npt.NDArray[np.int_]:
+        """Indices into the scene's configuration of ``arm``'s controlled joints."""
+        return self._columns[arm]
+
+    def set_arm(self, arm: str, positions: FloatArray) -> None:
+        """Put every movable joint of ``arm`` (its kinematics' order) at ``positions``."""
+        self.positions[self._all_columns[arm]] = positions
+
+    def set_arm_controlled(self, arm: str, positions: FloatArray) -> None:
+        """Put ``arm``'s controlled joints (``Arm.joint_names`` order) at ``positions``."""
+        self.positions[self._columns[arm]] = positions
+
+    def hand_joint(self, arm: str) -> str:
+        """The joint ``arm``'s fingers hang from (where a held object is attached)."""
+        hand = self._arms[arm].hand_joint
+        if hand is None:
+            raise KeyError(f"{arm} has no gripper")
+        return hand
+
+    def set_object(self, name: str, placement: pin.SE3) -> None:
+        """Move the (not held) object ``name`` to ``placement`` in the world."""
+        index = self.geometry.getGeometryId(name)
+        self.geometry.geometryObjects[index].placement = placement
+
+    def body_link(self, geometry_index: int) -> str:
+        """The link (prefixed) or object a geometry belongs to, for messages."""
+        owner = self._owners[geometry_index]
+        if owner in self._arms:
+            return self._link_name(self.geometry.geometryObjects[geometry_index])
+        return owner
+
+    def owner_of(self, body_link: str) -> str:
+        """The arm a link (as :meth:`body_link` names it) belongs to, or the name itself
+        (an object, the floor)."""
+        for arm in self._arms.values():
+            if arm.model.existFrame(body_link):
+                return arm.name
+        return body_link
+
+    def _arm_of(self, model: pin.Model, joint: int) -> str:
+        if joint == 0:
+            return ""
+        name = model.names[joint]
+        for arm in self._arms.values():
+            if arm.model.existJointName(name):
+                return arm.name
+        # Fixed links hang from the universe: the geometry's name carries the prefix.
+        return ""
+
+    # -- pairs ---------------------------------------------------------------------------------
+    def _add_pairs(self) -> None:
+        geometry = self.geometry
+        items = geometry.geometryObjects
+        links = [self._link_name(item) for item in items]
+        for index, owner in enumerate(self._owners):
+            if owner == "":  # a fixed link of an arm: find the arm by its name's prefix
+                self._owners[index] = self._arm_by_link(links[index])
+        for a in range(len(items)):
+            for b in range(a + 1, len(items)):
+                if self._counts(a, b, links):
+                    geometry.addCollisionPair(pin.CollisionPair(a, b))
+
+    def _link_name(self, item: pin.GeometryObject) -> str:
+        if item.parentFrame < len(self.model.frames):
+            return str(self.model.frames[item.parentFrame].name)
+        return str(item.name)  # the floor and objects: no frame of their own
+
+    def _arm_by_link(self, link: str) -> str:
+        for arm in self._arms.values():
+            if arm.model.existFrame(link):
+                return arm.name
+        return GROUND
+
+    def _counts(self, a: int, b: int, links: Sequence[str]) -> bool:
+        items = self.geometry.geometryObjects
+        joint_a, joint_b = items[a].parentJoint, items[b].parentJoint
+        if joint_a == joint_b:
+            return False  # one rigid piece (or both fixed in the world)
+        owner_a, owner_b = self._owners[a], self._owners[b]
+        if owner_a == owner_b and owner_a in self._arms:
+            parents = self.model.parents
+            if parents[joint_a] == joint_b or parents[joint_b] == joint_a:
+                return False
+            if frozenset((links[a], links[b])) in self._arms[owner_a].ignored_pairs:
+                return False
+        for held, other in ((owner_a, b), (owner_b, a)):
+            arm = self._held.get(held)
+            if arm is not None and self._in_gripper(arm, items[other].parentJoint):
+                return False
+        return True
+
+    def _in_gripper(self, arm: str, joint: int) -> bool:
+        """Whether ``joint`` is ``arm``'s hand joint or one hanging from it (a finger)."""
+        hand = self._arms[arm].hand_joint
+        if hand is None or joint == 0:
+            return False
+        hand_id = self.model.getJointId(hand)
+        return joint == hand_id or self.model.parents[joint] == hand_id
+
+    # -- checking --------------------------------------------------------------------------------
+    def checker(self, arms: Sequence[str]) -> CollisionChecker:
+        """A checker of configurations of ``arms``' controlled joints (concatenated in this
+        order), the rest of the scene where it is now."""
+        return CollisionChecker(self, arms)
+
+    def moving_geometries(self, joints: Iterable[int]) -> npt.NDArray[np.bool_]:
+        """Per geometry, whether it moves with any of the model joints ``joints``."""
+        moving_joints = set(joints)
+        supports = self.model.supports
+        return np.array(
+            [
+                bool(moving_joints.intersection(supports[item.parentJoint]))
+                for item in self.geometry.geometryObjects
+            ]
+        )
+
+    def joint_ids(self, arms: Sequence[str]) -> list[int]:
+        """Model joint ids of the controlled joints of ``arms``."""
+        return [
+            self.model.getJointId(name)
+            for arm in arms
+            for name in self._arms[arm].controlled_joints
+        ]
+
+
+class CollisionChecker:
+    """Collision checks of one request: the planned arms' joints move, the rest stands.
+
+    Args:
+        scene: the scene (its current configuration is the rest of the world).
+        arms: the planned arms; a state is their controlled joints, concatenated.
+    """
+
+    def __init__(self, scene: PlanningScene, arms: Sequence[str]) -> None:
+        self.scene = scene
+        self.arms = tuple(arms)
+        self.columns = np.concatenate([scene.columns(arm) for arm in arms])
+        moving = scene.moving_geometries(scene.joint_ids(arms))
+        data = scene.geometry_data
+        self.active = np.zeros(len(scene.geometry.collisionPairs), dtype=bool)
+        for index, pair in enumerate(scene.geometry.collisionPairs):
+            self.active[index] = moving[pair.first] or moving[pair.second]
+            data.activeCollisionPairs[index] = bool(self.active[index])
+        self._manager = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
+            scene.model, scene.geometry, data
+        )
+        self._q = scene.positions.copy()
+        #: How many states were checked.
+        self.checks = 0
+
+    @property
+    def dimension(self) -> int:
+        return int(self.columns.size)
+
+    def rest(self, positions: FloatArray | None = None) -> None:
+        """Take the scene's configuration (or ``positions``) for the joints not planned."""
+        self._q[:] = self.scene.positions if positions is None else positions
+
+    def valid(self, state: FloatArray) -> bool:
+        """Whether the planned joints at ``state`` keep the clearance from everything."""
+        self.checks += 1
+        q = self._q
+        q[self.columns] = state
+        return not pin.computeCollisions(self.scene.model, self.scene.data, self._manager, q, True)
+
+    def collision(self, state: FloatArray) -> tuple[str, str, float] | None:
+        """The first pair closer than its margin at ``state``: (link, link, distance [m]),
+        or None. Pair by pair: slower than :meth:`valid`, for messages."""
+        scene = self.scene
+        q = self._q.copy()
+        q[self.columns] = state
+        pin.updateGeometryPlacements(
+            scene.model, scene.data, scene.geometry, scene.geometry_data, q
+        )
+        for index in np.flatnonzero(self.active):
+            if pin.computeCollision(scene.geometry, scene.geometry_data, int(index)):
+                pair = scene.geometry.collisionPairs[int(index)]
+                distance = pin.computeDistance(scene.geometry, scene.geometry_data, int(index))
+                return (
+                    scene.body_link(pair.first),
+                    scene.body_link(pair.second),
+                    float(distance.min_distance),
+                )
+        return None
