@@ -2,7 +2,8 @@
 
 One recording exercises every topic armfleet publishes: two arms moving until they touch
 (protective stop, ``/collisions``), a gripper closing and opening, a dynamic object on
-``/tf``, non-finite commands sent on the bus (refused, but recorded), and an arm whose
+``/tf``, planned motions (one with a tool path that is not finite), non-finite commands
+sent on the bus (refused, but recorded), and an arm whose
 controller produces non-finite torques (error). Every message of every channel is checked
 with ``jsonschema`` against the schema record of its channel, read with the official
 ``mcap`` reader; and the schemas stay readable by Foxglove (one JSON type per field).
@@ -14,7 +15,7 @@ import json
 import math
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,7 @@ from mcap.reader import make_reader
 import armfleet
 from armfleet.messages import ArmMode, ControllerState, GripperCommand, JointCommand, JointState
 from armfleet.recording.encode import encoder_for, numbers_or_nan
+from tests.viewer_helpers import straight_plan
 
 #: control_msgs/msg/JointTrajectoryControllerState in ROS 2 Humble (rosidl field order).
 HUMBLE_CONTROLLER_STATE_FIELDS = (
@@ -71,6 +73,10 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Recorded]:
         world.bus.publish(
             "/bob/gripper_controller/commands", GripperCommand(math.inf, False, math.nan)
         )
+        # Planned motions as they start (toby's with a tool path that is not finite).
+        world.bus.publish("/bob/planned_motion", straight_plan(world, bob, lean_forward(bob)))
+        plan = straight_plan(world, toby, lean_forward(toby))
+        world.bus.publish("/toby/planned_motion", replace(plan, tool_path=plan.tool_path * np.nan))
         bob.move_to(lean_forward(bob))
         toby.move_to(lean_forward(toby))
         world.run(2.5)  # they touch: protective stop
@@ -118,6 +124,7 @@ def test_the_run_exercised_every_case(recorded: Recorded, contents: Any) -> None
     assert any(m["contacts"] for m in messages["/collisions"])
     assert any(t["child_frame_id"] == "cube" for m in messages["/tf"] for t in m["transforms"])
     assert any(m["data"] == [] for m in messages["/bob/position_controller/commands"])
+    assert messages["/toby/planned_motion"][0]["tool_path"] == []
     gripper_commands = messages["/bob/gripper_controller/commands"]
     assert any("width" not in m and "force" not in m for m in gripper_commands)
     # toby's NaN torques never reach /toby/joint_states: the fault replaces them first.
