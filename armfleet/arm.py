@@ -285,14 +285,14 @@ class Arm:
             PlanningFailed, ArmInMotion: with ``avoid_collisions``; nothing moves.
         """
         if flag(avoid_collisions, "avoid_collisions"):
-            plan = self.plan(positions, clearance_m=clearance_m, timeout_s=timeout_s)
-            return self._world_planner().execute(plan)
+            planned = self.plan(positions, clearance_m=clearance_m, timeout_s=timeout_s)
+            return self._world_planner().execute(planned)
         values = self._position_controller.validate(positions)
         if self._controller_manager.fault is not None:
             raise ArmFault(self._name, self._controller_manager.fault)
-        plan = self._position_controller.plan(values)
+        motion = self._position_controller.plan(values)
         self._publish_command(values)
-        return plan.duration
+        return motion.duration
 
     @while_alive
     def start_plan(self, values: FloatArray, plan: MotionPlan) -> None:

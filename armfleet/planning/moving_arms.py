@@ -47,13 +47,14 @@ class MovingArm:
 
     @property
     def final(self) -> FloatArray:
-        return self.positions[-1]
+        last: FloatArray = self.positions[-1]
+        return last
 
     def at(self, times: FloatArray) -> FloatArray:
         """Its reference positions (rows) at ``times`` after now [s]; the last after its end."""
         index = np.clip(np.floor(times / self.period + 1e-9).astype(int) - 1, -1, None)
         index = np.minimum(index, len(self.positions) - 1)
-        rows = self.positions[np.maximum(index, 0)].copy()
+        rows: FloatArray = self.positions[np.maximum(index, 0)].copy()
         before = index < 0
         if before.any():
             rows[before] = self.positions[0]  # within the first period: as good as now

@@ -280,7 +280,7 @@ class PlanningScene:
         if hand is None or joint == 0:
             return False
         hand_id = self.model.getJointId(hand)
-        return joint == hand_id or self.model.parents[joint] == hand_id
+        return bool(joint == hand_id or self.model.parents[joint] == hand_id)
 
     # -- checking --------------------------------------------------------------------------------
     def checker(self, arms: Sequence[str]) -> CollisionChecker:
