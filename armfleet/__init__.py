@@ -42,10 +42,12 @@ from armfleet.messages import (
     GripperState,
     JointCommand,
     JointState,
+    PlannedMotion,
     TFMessage,
     TransformStamped,
 )
 from armfleet.objects import WorldObject
+from armfleet.planning import FailureReason, Plan, PlanningFailed, PoseGoal
 from armfleet.recording import (
     Recorder,
     Recording,
@@ -70,6 +72,7 @@ __all__ = [
     "BringupStage",
     "Bus",
     "ControllerState",
+    "FailureReason",
     "FleetSpec",
     "FrameInUse",
     "Gripper",
@@ -85,6 +88,10 @@ __all__ = [
     "NoGripper",
     "ObjectCollision",
     "ObjectError",
+    "Plan",
+    "PlannedMotion",
+    "PlanningFailed",
+    "PoseGoal",
     "Recorder",
     "Recording",
     "RecordingError",
