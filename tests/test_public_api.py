@@ -60,7 +60,13 @@ def test_arm_properties(prop: str) -> None:
 
 
 def test_arm_move_to() -> None:
-    assert list(inspect.signature(armfleet.Arm.move_to).parameters) == ["self", "positions"]
+    """One positional argument (issue #2's contract); planning options only by keyword (#16)."""
+    parameters = inspect.signature(armfleet.Arm.move_to).parameters
+    positional = [
+        name for name, p in parameters.items() if p.kind is not inspect.Parameter.KEYWORD_ONLY
+    ]
+    assert positional == ["self", "positions"]
+    assert {"avoid_collisions", "clearance_m", "timeout_s"} <= set(parameters)
 
 
 def test_readme_contract_runs(world: armfleet.World) -> None:
