@@ -13,6 +13,7 @@ reader and validated with ``jsonschema``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import logging
@@ -61,9 +62,11 @@ def viewer_of(world: armfleet.World) -> Viewer:
 
 
 def nudge(arm: armfleet.Arm, delta: float) -> np.ndarray:
-    """A target ``delta`` rad from where the arm is, kept 0.1 rad inside the limits."""
+    """A target ``delta`` rad from the arm's home on every joint, 0.1 rad inside the limits
+    (from home, not from where the arm is: a run of tests does not fold it onto itself)."""
     lower, upper = arm.joint_limits
-    target: np.ndarray = np.clip(arm.positions + delta, lower + 0.1, upper - 0.1)
+    home = np.array(arm.description.home, dtype=float)
+    target: np.ndarray = np.clip(home + delta, lower + 0.1, upper - 0.1)
     return target
 
 
@@ -88,17 +91,28 @@ def viewed() -> Iterator[armfleet.World]:
 
 
 # -- the viewer ------------------------------------------------------------------------
-def test_the_tool_path_is_drawn_while_the_motion_runs_and_goes_when_it_ends(
-    viewed: armfleet.World,
-) -> None:
+@contextlib.contextmanager
+def announcements(world: armfleet.World, arm: str) -> Iterator[list[PlannedMotion]]:
+    """The plans published on ``/<arm>/planned_motion`` while in the block."""
+    seen: list[PlannedMotion] = []
+    subscription = world.bus.subscribe(f"/{arm}/planned_motion", seen.append)
+    try:
+        yield seen
+    finally:
+        subscription.cancel()
+
+
+def test_a_collision_free_move_shows_its_path_while_it_runs(viewed: armfleet.World) -> None:
+    """The planner's own announcement (``avoid_collisions=True``), drawn and removed."""
     world, bob = viewed, viewed.arm("bob")
     viewer = viewer_of(world)
-    with SceneWatcher(viewer.port) as watcher:
+    with SceneWatcher(viewer.port) as watcher, announcements(world, "bob") as announced:
         watcher.wait_quiet()
         goal = nudge(bob, 0.4)
         start_pose = tool0_pose(bob)
-        plan = start_planned_move(world, bob, goal)
+        duration = bob.move_to(goal, avoid_collisions=True)
         world.step()
+        [plan] = announced
         watcher.wait_for(lambda scene: line_path("bob") in scene.objects)
         command = watcher.state.objects[line_path("bob")]
         assert command["object"]["object"]["type"] == "Line"
@@ -111,23 +125,41 @@ def test_the_tool_path_is_drawn_while_the_motion_runs_and_goes_when_it_ends(
         assert line_path("toby") not in watcher.state.objects, "toby has no plan"
 
         # Shown at every step while bob moves; gone at the first step he stands still.
-        end_s = plan.stamp + plan.duration
         while bob.is_moving:
             assert "bob" in viewer.planned_motions, f"line gone at t = {world.time:.3f} s"
             world.step()
         assert "bob" not in viewer.planned_motions
-        assert world.time <= end_s + 2 * world.dt, "the line went when the motion ended"
+        assert world.time <= plan.stamp + duration + 2 * world.dt, "gone as the motion ended"
         watcher.wait_for(lambda scene: line_path("bob") not in scene.objects)
         # Its node is gone, the arm's meshes are all still there.
         assert len(watcher.state.nodes_under("/meshcat/armfleet/bob/visuals")) == 11
     assert viewer.error is None
 
 
+def test_a_plan_published_by_hand_is_drawn_the_same_way(viewed: armfleet.World) -> None:
+    """What the planner does, done by hand (publish, then an ordinary move): the line is
+    the published tool path, until the motion ends."""
+    world, bob = viewed, viewed.arm("bob")
+    viewer = viewer_of(world)
+    with SceneWatcher(viewer.port) as watcher:
+        watcher.wait_quiet()
+        plan = start_planned_move(world, bob, nudge(bob, -0.3))
+        world.step()
+        watcher.wait_for(lambda scene: line_path("bob") in scene.objects)
+        vertices = line_vertices(watcher.state.objects[line_path("bob")])
+        np.testing.assert_allclose(vertices, plan.tool_path, atol=VERTEX_TOLERANCE_M)
+        while bob.is_moving:
+            assert "bob" in viewer.planned_motions, f"line gone at t = {world.time:.3f} s"
+            world.step()
+        assert "bob" not in viewer.planned_motions
+        watcher.wait_for(lambda scene: line_path("bob") not in scene.objects)
+
+
 def test_the_line_is_a_visible_colour(viewed: armfleet.World) -> None:
     world, bob = viewed, viewed.arm("bob")
     with SceneWatcher(viewer_of(world).port) as watcher:
         watcher.wait_quiet()
-        start_planned_move(world, bob, nudge(bob, -0.3))
+        start_planned_move(world, bob, nudge(bob, 0.2))
         world.step()
         watcher.wait_for(lambda scene: line_path("bob") in scene.objects)
         material = watcher.state.objects[line_path("bob")]["object"]["materials"][0]
@@ -143,13 +175,14 @@ def test_the_line_is_a_visible_colour(viewed: armfleet.World) -> None:
 def test_re_targeting_mid_motion_removes_the_line(viewed: armfleet.World) -> None:
     world, bob = viewed, viewed.arm("bob")
     viewer = viewer_of(world)
-    with SceneWatcher(viewer.port) as watcher:
+    with SceneWatcher(viewer.port) as watcher, announcements(world, "bob") as announced:
         watcher.wait_quiet()
-        plan = start_planned_move(world, bob, nudge(bob, 0.4))
+        bob.move_to(nudge(bob, 0.4), avoid_collisions=True)
         world.run(0.1)
         assert "bob" in viewer.planned_motions
         # The plan's own target again (as the planner publishes "for the record") keeps it.
-        world.bus.publish("/bob/position_controller/commands", JointCommand(tuple(bob_goal(plan))))
+        own = JointCommand(tuple(bob_goal(announced[0])))
+        world.bus.publish("/bob/position_controller/commands", own)
         world.step()
         assert "bob" in viewer.planned_motions
         bob.move_to(nudge(bob, -0.2))  # a new target: the plan is abandoned
@@ -326,15 +359,17 @@ def plans_recorded(path: Path) -> tuple[dict[str, Any], dict[str, list[tuple[int
 
 
 def record_planned_move(path: Path) -> tuple[PlannedMotion, float]:
-    """Record bob running one planned motion to its end; (the plan, the recording's end [s])."""
+    """Record bob running one collision-free motion to its end; (its plan as announced, the
+    recording's end [s])."""
     with armfleet.World() as world:
         bob = world.spawn("bob", at=(0, 0))
         world.spawn("toby", at=(1, 0))
-        with armfleet.record(world, path):
+        with armfleet.record(world, path), announcements(world, "bob") as announced:
             world.run(0.05)
-            plan = start_planned_move(world, bob, nudge(bob, 0.4))
+            bob.move_to(nudge(bob, 0.4), avoid_collisions=True)
             settle(world, bob)
             world.run(0.3)
+            [plan] = announced
             return plan, world.time
 
 
