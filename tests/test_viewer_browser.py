@@ -19,7 +19,9 @@ import pytest
 from PIL import Image
 
 import armfleet
+from armfleet.messages import PlannedMotion
 from armfleet.viewer.headless_chromium import CHROMIUM, CHROMIUM_FLAGS
+from armfleet.viewer.plan_lines import PLAN_COLOR
 from armfleet.viewer.scene import BACKGROUND_TOP
 from tests.viewer_helpers import bob_and_toby_viewed, expected_visual_poses
 
@@ -362,3 +364,55 @@ def test_objects_in_the_live_page_and_the_replay(browser: Any, tmp_path: Path) -
         assert end[2, 3] == pytest.approx(0.36, abs=1e-3), "and ends on the table"
     finally:
         tab.close()
+
+
+# The planned-motion line of an arm in the page's scene: its vertex count and colour; null
+# when the arm's node has none.
+PLAN_LINE_JS = """
+(arm) => {
+  const root = viewer.scene_tree.children["meshcat"];
+  const fleet = root && root.children["armfleet"];
+  const node = fleet && fleet.children[arm] && fleet.children[arm].children["planned_motion"];
+  if (!node) return null;
+  let found = null;
+  node.object.traverse((o) => {
+    if (o.isLine) found = {vertices: o.geometry.attributes.position.count,
+                           color: o.material.color.getHex(), visible: o.visible};
+  });
+  return found;
+}
+"""
+
+
+def plan_colored_pixels(pixels: np.ndarray) -> int:
+    """Pixels of the planned-motion magenta: red and blue well above green. The 1 px line
+    is anti-aliased into what is behind it; nothing else in the scene (grey arms, blue-grey
+    sky, dark grid, orange target, the origin's red, green and blue axes) is magenta."""
+    red, green, blue = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    return int(((red - green > 80) & (blue - green > 60)).sum())
+
+
+def test_page_draws_a_planned_path_while_it_runs(live_page: LivePage, live: armfleet.World) -> None:
+    """After the replay test (bob holds until then): bob plans around toby; the page holds
+    the line of the announced tool path while bob moves, and not once he stands still."""
+    page = live_page.tab
+    bob = live.arm("bob")
+    announced: list[PlannedMotion] = []
+    subscription = live.bus.subscribe("/bob/planned_motion", announced.append)
+    try:
+        assert page.evaluate(PLAN_LINE_JS, "bob") is None
+        goal = np.array(bob.description.home) + np.array([0.9, 0.4, 0.0, 0.3, 0.0, 0.2, 0.0])
+        bob.move_to(goal, avoid_collisions=True)
+        live.step()
+        [plan] = announced
+        page.wait_for_function(f"() => ({PLAN_LINE_JS})('bob') !== null", timeout=15_000)
+        line = page.evaluate(PLAN_LINE_JS, "bob")
+        assert line == {"vertices": len(plan.tool_path), "color": PLAN_COLOR, "visible": True}
+        assert plan_colored_pixels(screenshot(page, "viewer_planned_path.png")) >= 20
+        while bob.is_moving:
+            live.run(0.05)
+        live.step()
+        page.wait_for_function(f"() => ({PLAN_LINE_JS})('bob') === null", timeout=15_000)
+        assert plan_colored_pixels(screenshot(page)) <= 2
+    finally:
+        subscription.cancel()
