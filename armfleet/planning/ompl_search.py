@@ -27,9 +27,9 @@ from armfleet.planning.problem import PlanningProblem
 ou.setLogLevel(ou.LOG_ERROR)
 
 #: Motion-check step as a fraction of the state space's extent (OMPL's resolution).
-MOTION_RESOLUTION = 0.004
-#: Time given to shortening the path after a solution is found, at most [s].
-SIMPLIFY_BUDGET_S = 0.02
+MOTION_RESOLUTION = 0.01
+#: OMPL's ``PathSimplifier`` steps run on a solution, in order.
+SIMPLIFICATION = ("reduceVertices", "ropeShortcutPath")
 
 
 @dataclass
@@ -55,8 +55,13 @@ class OmplRrtConnect:
 
     name = "OMPL RRTConnect"
 
-    def __init__(self, resolution: float = MOTION_RESOLUTION) -> None:
+    def __init__(
+        self,
+        resolution: float = MOTION_RESOLUTION,
+        simplification: tuple[str, ...] = SIMPLIFICATION,
+    ) -> None:
         self.resolution = resolution
+        self.simplification = simplification
 
     def search(self, problem: PlanningProblem, deadline: float) -> SearchResult:
         """Search a path from ``problem.start`` to ``problem.goal`` until ``deadline``
@@ -92,10 +97,8 @@ class OmplRrtConnect:
         path = definition.getSolutionPath()
         began = time.perf_counter()
         simplifier = og.PathSimplifier(info)
-        simplifier.reduceVertices(path)
-        simplifier.ropeShortcutPath(path)
-        simplifier.collapseCloseVertices(path)
-        simplifier.reduceVertices(path)
+        for step in self.simplification:
+            getattr(simplifier, step)(path)
         simplify_s = time.perf_counter() - began
         states = path.getStates()
         waypoints = np.array([state[0:n] for state in states], dtype=float)

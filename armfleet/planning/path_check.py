@@ -10,7 +10,8 @@ at most ``(d_a + d_b) / 2``, a point against a still body by ``d_a / 2``, and tw
 of one arm by ``d_a / 2`` too (seen from the link nearer the base, only the joints
 between them move the other). So when every step keeps ``d_a + d_b <= 2 c`` and
 ``d_a <= 2 m``, nothing can meet between checked states: the path is proven
-contact-free, not sampled.
+contact-free, not sampled. The same holds with wider margins (the checker's ``far``
+check) and proportionally longer steps, which is how most of a path is proven.
 """
 
 from __future__ import annotations
@@ -49,7 +50,12 @@ def joint_levers(checker: CollisionChecker) -> FloatArray:
 
 
 class PathCertifier:
-    """Checks paths of one checker at the step that proves them contact-free.
+    """Checks paths of one checker at the steps that prove them contact-free.
+
+    Each segment is first walked in long steps with the wide margins of
+    :meth:`CollisionChecker.far`; a step whose two ends are both far from everything is
+    proven. Only the steps near something are walked again, in the short steps the
+    clearance allows.
 
     Args:
         checker: the request's collision checker (its scene's margins must be > 0).
@@ -61,35 +67,41 @@ class PathCertifier:
         if not (scene.clearance_m > 0.0 and scene.self_clearance_m > 0.0):
             raise ValueError("a contact-free proof needs margins > 0")
         self.levers = joint_levers(checker)
-        self._clearance_m = scene.clearance_m
-        self._self_clearance_m = scene.self_clearance_m
-        #: Per planned arm, its joints' positions in a state.
+        self._near = (scene.clearance_m, scene.self_clearance_m)
+        self._far = (float(scene.far_margins.max()), float(scene.far_margins.min()))
         sizes = [scene.columns(arm).size for arm in checker.arms]
-        self._bounds = np.cumsum([0, *sizes])
+        self._bounds = np.cumsum([0, *sizes])[:-1]
 
-    def steps(self, start: FloatArray, end: FloatArray) -> int:
-        """Equal steps from ``start`` to ``end`` that keep the proof (at least 1)."""
+    def steps(self, start: FloatArray, end: FloatArray, far: bool = False) -> int:
+        """Equal steps from ``start`` to ``end`` that keep the proof with the near (or far)
+        margins (at least 1)."""
+        between, within = self._far if far else self._near
         moved = self.levers * np.abs(end - start)
-        per_arm = np.add.reduceat(moved, self._bounds[:-1])
-        needed = max(
-            float(per_arm.sum()) / (2.0 * self._clearance_m),
-            float(per_arm.max()) / (2.0 * self._self_clearance_m),
-        )
+        per_arm = np.add.reduceat(moved, self._bounds)
+        needed = max(float(per_arm.sum()) / (2.0 * between), float(per_arm.max()) / (2.0 * within))
         return max(1, math.ceil(needed))
 
     def first_failure(self, path: FloatArray) -> tuple[int, FloatArray] | None:
         """The first (segment index, state) of ``path`` that is not clear, or None.
 
         The waypoints themselves are checked too (the first one included)."""
-        if not self._checker.valid(path[0]):
+        checker = self._checker
+        if not checker.valid(path[0]):
             return 0, path[0]
         for index in range(len(path) - 1):
             start, end = path[index], path[index + 1]
-            steps = self.steps(start, end)
-            for s in np.arange(1, steps + 1) / steps:
-                state = start + s * (end - start)
-                if not self._checker.valid(state):
-                    return index, state
+            count = self.steps(start, end, far=True)
+            grid = start + np.linspace(0.0, 1.0, count + 1)[:, None] * (end - start)
+            far = [checker.far(state) for state in grid]
+            for k in range(count):
+                if far[k] and far[k + 1]:
+                    continue  # both ends far from everything: this step is proven
+                a, b = grid[k], grid[k + 1]
+                fine = self.steps(a, b)
+                for s in np.arange(0, fine + 1) / fine:
+                    state = a + s * (b - a)
+                    if not checker.valid(state):
+                        return index, state
         return None
 
     def clear(self, start: FloatArray, end: FloatArray) -> bool:

@@ -74,7 +74,7 @@ def find_path(problem: PlanningProblem, search: OmplRrtConnect | None = None) ->
     seconds["search"] = seconds["simplify"] = 0.0
     samples, resolution = 0, search.resolution
     while time.perf_counter() < deadline:
-        result = OmplRrtConnect(resolution).search(problem, deadline)
+        result = OmplRrtConnect(resolution, search.simplification).search(problem, deadline)
         samples += result.samples
         seconds["search"] += result.search_s
         seconds["simplify"] += result.simplify_s

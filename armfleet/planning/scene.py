@@ -34,6 +34,9 @@ from armfleet.planning.object_geometry import convex_hull
 GROUND = "ground"
 #: Largest margin between two links of one arm [m] (the clearance, if smaller).
 SELF_CLEARANCE_M = 0.01
+#: Wider margins of the "far from everything" check [m]: between bodies, within an arm.
+FAR_CLEARANCE_M = 0.05
+FAR_SELF_CLEARANCE_M = 0.03
 
 
 @dataclass(frozen=True)
@@ -161,12 +164,18 @@ class PlanningScene:
         self._owners = owners
         self._held = {obj.name: obj.held_by for obj in objects if obj.held_by is not None}
         self._add_pairs()
-        self.data = model.createData()
-        self.geometry_data = geometry.createData()
-        for index, pair in enumerate(geometry.collisionPairs):
-            same_body = owners[pair.first] == owners[pair.second]
-            margin = self.self_clearance_m if same_body else clearance_m
-            self.geometry_data.collisionRequests[index].security_margin = margin
+        same_body = np.array(
+            [owners[pair.first] == owners[pair.second] for pair in geometry.collisionPairs],
+            dtype=bool,
+        )
+        #: Per collision pair, its margin [m]: within one arm, between different bodies.
+        self.margins = np.where(same_body, self.self_clearance_m, clearance_m)
+        #: Per collision pair, the wider margin of :meth:`CollisionChecker.far` [m].
+        self.far_margins = np.where(
+            same_body,
+            max(self.self_clearance_m, FAR_SELF_CLEARANCE_M),
+            max(clearance_m, FAR_CLEARANCE_M),
+        )
         #: The configuration of every movable joint of every arm, where they are now.
         self.positions = pin.neutral(model)
         self._columns = {
@@ -311,6 +320,11 @@ class PlanningScene:
 class CollisionChecker:
     """Collision checks of one request: the planned arms' joints move, the rest stands.
 
+    Each checker has its own geometry data, so that checkers of one scene don't
+    disturb each other. It answers two questions: :meth:`valid` (the scene's margins,
+    the clearance) and :meth:`far` (a wider margin, :data:`FAR_CLEARANCE_M`, which lets
+    :mod:`~armfleet.planning.path_check` take longer steps away from obstacles).
+
     Args:
         scene: the scene (its current configuration is the rest of the world).
         arms: the planned arms; a state is their controlled joints, concatenated.
@@ -321,32 +335,46 @@ class CollisionChecker:
         self.arms = tuple(arms)
         self.columns = np.concatenate([scene.columns(arm) for arm in arms])
         moving = scene.moving_geometries(scene.joint_ids(arms))
-        data = scene.geometry_data
-        self.active = np.zeros(len(scene.geometry.collisionPairs), dtype=bool)
-        for index, pair in enumerate(scene.geometry.collisionPairs):
-            self.active[index] = moving[pair.first] or moving[pair.second]
-            data.activeCollisionPairs[index] = bool(self.active[index])
+        pairs = scene.geometry.collisionPairs
+        self.active = np.array([moving[p.first] or moving[p.second] for p in pairs], dtype=bool)
+        self.data = self._data(scene.margins)
+        self._far_data = self._data(scene.far_margins)
         self._manager = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
-            scene.model, scene.geometry, data
+            scene.model, scene.geometry, self.data
         )
+        self._far_manager = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
+            scene.model, scene.geometry, self._far_data
+        )
+        self._model_data = scene.model.createData()
         self._q = scene.positions.copy()
         #: How many states were checked.
         self.checks = 0
 
+    def _data(self, margins: FloatArray) -> pin.GeometryData:
+        data = self.scene.geometry.createData()
+        for index, (margin, active) in enumerate(zip(margins, self.active, strict=True)):
+            data.collisionRequests[index].security_margin = float(margin)
+            data.activeCollisionPairs[index] = bool(active)
+        return data
+
     @property
     def dimension(self) -> int:
         return int(self.columns.size)
-
-    def rest(self, positions: FloatArray | None = None) -> None:
-        """Take the scene's configuration (or ``positions``) for the joints not planned."""
-        self._q[:] = self.scene.positions if positions is None else positions
 
     def valid(self, state: FloatArray) -> bool:
         """Whether the planned joints at ``state`` keep the clearance from everything."""
         self.checks += 1
         q = self._q
         q[self.columns] = state
-        return not pin.computeCollisions(self.scene.model, self.scene.data, self._manager, q, True)
+        return not pin.computeCollisions(self.scene.model, self._model_data, self._manager, q, True)
+
+    def far(self, state: FloatArray) -> bool:
+        """Whether the planned joints at ``state`` keep :attr:`PlanningScene.far_margins`."""
+        self.checks += 1
+        q = self._q
+        q[self.columns] = state
+        model, data = self.scene.model, self._model_data
+        return not pin.computeCollisions(model, data, self._far_manager, q, True)
 
     def collision(self, state: FloatArray) -> tuple[str, str, float] | None:
         """The first pair closer than its margin at ``state``: (link, link, distance [m]),
@@ -354,13 +382,11 @@ class CollisionChecker:
         scene = self.scene
         q = self._q.copy()
         q[self.columns] = state
-        pin.updateGeometryPlacements(
-            scene.model, scene.data, scene.geometry, scene.geometry_data, q
-        )
+        pin.updateGeometryPlacements(scene.model, self._model_data, scene.geometry, self.data, q)
         for index in np.flatnonzero(self.active):
-            if pin.computeCollision(scene.geometry, scene.geometry_data, int(index)):
+            if pin.computeCollision(scene.geometry, self.data, int(index)):
                 pair = scene.geometry.collisionPairs[int(index)]
-                distance = pin.computeDistance(scene.geometry, scene.geometry_data, int(index))
+                distance = pin.computeDistance(scene.geometry, self.data, int(index))
                 return (
                     scene.body_link(pair.first),
                     scene.body_link(pair.second),
