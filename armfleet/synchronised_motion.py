@@ -17,6 +17,7 @@ from armfleet.controllers.jerk_limited_trajectory import MotionPlan, TrajectoryE
 from armfleet.errors import ArmFault, ArmfleetError
 from armfleet.inverse_kinematics import is_pose
 from armfleet.messages import FloatArray
+from armfleet.planning.motion_planner import PoseGoal
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
@@ -28,7 +29,9 @@ _ROUNDS = 10
 
 def joint_target(arm: Arm, target: Any) -> FloatArray:
     """``target`` as arm joint positions: joint positions as they are, a 4x4 pose
-    (or ``pinocchio.SE3``) of tool0 in the world through IK."""
+    (or ``pinocchio.SE3``) of tool0 in the world, or a :class:`PoseGoal`, through IK."""
+    if isinstance(target, PoseGoal):
+        return arm.solve_ik(target.pose, target.frame, link=target.link)
     if is_pose(target):
         return arm.solve_ik(target)
     return arm.position_controller.validate(target)
