@@ -4,6 +4,7 @@ reported, never asserted)."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -48,3 +49,38 @@ def test_ik_benchmark_short_mode_reports_every_model(tmp_path: Path) -> None:
         assert row["poses"] == 10 and row["success_rate"] >= 0.8  # 10/10 on every model so far
         assert 0 < row["median_ms"] <= row["p95_ms"] <= row["max_ms"]
         assert row["model"] in result.stdout
+
+
+def test_planner_choice_short_mode_compares_both_libraries(tmp_path: Path) -> None:
+    out = tmp_path / "planner_choice.json"
+    result = subprocess.run(
+        [sys.executable, str(BENCHMARKS / "planner_choice.py"), "--short", "--json", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    figures = json.loads(out.read_text())
+    assert figures["settings"]["model_disagreements"].startswith("0/")  # one collision model
+    assert set(figures["straight_line_collides"]) == {"1 arm", "2 arms", "all"}
+    rows = {(row["planner"], row["kind"]): row for row in figures["rows"]}
+    assert {"OMPL", "RoboPlan"} <= {planner for planner, _ in rows}
+    for row in rows.values():
+        assert row["problems"] == 3 and 0 <= row["solved"] <= 3
+        if row["solved"]:
+            assert 0 < row["plan_ms_median"] <= row["plan_ms_p95"]
+            assert row["length_ratio_median"] >= 1 - 1e-9  # never shorter than the straight line
+    assert rows[("OMPL", "2 arms")]["touching_paths"] == 0  # its margin keeps paths clear
+    assert "RoboPlan/OMPL" in result.stdout
+
+
+def test_planner_choice_without_roboplan_says_how_to_get_it(tmp_path: Path) -> None:
+    hidden = tmp_path / "roboplan"
+    hidden.mkdir()
+    (hidden / "__init__.py").write_text("raise ImportError('roboplan hidden by the test')\n")
+    result = subprocess.run(
+        [sys.executable, str(BENCHMARKS / "planner_choice.py"), "--short"],
+        capture_output=True, text=True, timeout=120, env=os.environ | {"PYTHONPATH": str(tmp_path)},
+    )  # fmt: skip
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines() == [
+        "planner_choice needs roboplan: pip install -e .[bench]"
+    ]
