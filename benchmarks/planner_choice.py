@@ -326,6 +326,9 @@ def summarise(attempts: list[Attempt]) -> dict[str, Any]:
         "length_ratio_median": round(percentile([a.length_ratio or 0 for a in solved], 50), 3),
         "length_ratio_p95": round(percentile([a.length_ratio or 0 for a in solved], 95), 3),
         "touching_paths": sum(bool(a.touches) for a in solved),
+        "touching_fraction": round(sum(bool(a.touches) for a in solved) / len(solved), 4)
+        if solved
+        else None,
         "touching_paths_own_model": sum(bool(a.touches_own_model) for a in solved),
     }
     checks = [a.checks for a in solved if a.checks is not None]
