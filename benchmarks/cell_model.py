@@ -198,7 +198,9 @@ class Checker:
         """Names of the first two objects closer than the margin at ``q``, or None."""
         if not self.collides(q):
             return None
-        pin.computeCollisions(self._model, self._data, self._manager, q, False)
+        # Pair by pair, stopping at the first: every result up to it is fresh (the
+        # broadphase leaves the results of pairs it culls as they were).
+        pin.computeCollisions(self._model, self._data, self._geom, self._gdata, q, True)
         for k, result in enumerate(self._gdata.collisionResults):
             if result.isCollision():
                 pair = self._geom.collisionPairs[k]
