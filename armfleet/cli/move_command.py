@@ -1,5 +1,6 @@
-"""``armfleet move NAME --joints q1 q2 ... | --pose X Y Z [ROLL PITCH YAW] [--wait]``: send an
-arm to joint positions, or one of its links to a Cartesian pose."""
+"""``armfleet move NAME --joints q1 q2 ... | --pose X Y Z [ROLL PITCH YAW] [--wait]
+[--avoid-collisions [--clearance M] [--planning-timeout S]]``: send an arm to joint
+positions, or one of its links to a Cartesian pose, straight or planned around obstacles."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.number_arguments import wait_timeout
 from armfleet.cli.parser import OneLineParser, UsageError
+from armfleet.cli.planning_arguments import add_planning_arguments, planning_keywords
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import pose_matrix
 from armfleet.remote import Client
@@ -44,10 +46,13 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         "--link", default=_POSE_OPTIONS["link"], metavar="LINK",
         help="the arm's link that --pose places (default tool0)",
     )  # fmt: skip
-    parser.add_argument(
+    # A straight tool line and a path around obstacles are two different motions.
+    path = parser.add_mutually_exclusive_group()
+    path.add_argument(
         "--linear", action="store_true",
         help="with --pose: a straight line from where the link is (the arm must be at rest)",
     )  # fmt: skip
+    add_planning_arguments(parser, path)
     parser.add_argument("--wait", action="store_true", help="return once the arm holds the target")
     parser.add_argument(
         "--wait-timeout", type=wait_timeout, default=WAIT_TIMEOUT_S, metavar="S",
@@ -67,12 +72,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def move_joints(args: argparse.Namespace) -> int:
+    planning = planning_keywords(args)
     with connect_from(args) as client:
         arm = client.arm(args.name)
-        arm.move_to(args.joints)
+        duration = arm.move_to(args.joints, **planning)
         target = " ".join(f"{v:+.3f}" for v in args.joints)
         if not args.wait:
-            print(f"{arm.name}: moving to [{target}]")
+            how = " around obstacles" if planning else ""
+            print(f"{arm.name}: moving to [{target}]{how}, {duration:.2f} s")
             return 0
         state = arm.wait(args.wait_timeout)
         print(f"{arm.name}: holding [{target}] at t={state.stamp:.3f}s")
@@ -86,12 +93,16 @@ def move_pose(args: argparse.Namespace) -> int:
     for axis, angle in zip(("roll", "pitch", "yaw"), values[3:], strict=False):
         ANGLE_DEG.check(angle, f"--pose {axis}")  # the world checks the position
     goal = pose_matrix(values[:3], values[3:]) if len(values) == 6 else np.array(values)
+    planning = planning_keywords(args)
     with connect_from(args) as client:
         arm = client.arm(args.name)
-        duration = arm.move_to_pose(goal, args.frame, link=args.link, linear=args.linear)
+        duration = arm.move_to_pose(
+            goal, args.frame, link=args.link, linear=args.linear, **planning
+        )
         where = f"({', '.join(f'{v:.4f}' for v in values[:3])}) m in {args.frame}"
         if not args.wait:
-            print(f"{arm.name}: moving {args.link} to {where}, {duration:.2f} s")
+            how = " around obstacles" if planning else ""
+            print(f"{arm.name}: moving {args.link} to {where}{how}, {duration:.2f} s")
             return 0
         state = arm.wait(args.wait_timeout)
         reached = _link_position(client, arm, args.frame, args.link)

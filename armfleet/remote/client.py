@@ -12,9 +12,12 @@ import zmq
 from armfleet.checks import number_ranges
 from armfleet.errors import ArmfleetError
 from armfleet.messages import FloatArray, JointCommand, Positions
+from armfleet.planning.problem import DEFAULT_CLEARANCE_M
+from armfleet.planning.problem import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
 from armfleet.remote import runtime_file
 from armfleet.remote.address import normalize_address
 from armfleet.remote.errors import NoWorldFound, RequestTimeout
+from armfleet.remote.planning_options import planning_request
 from armfleet.remote.protocol import (
     DEFAULT_QUEUE_SIZE,
     HARD_FRAME_LIMIT_BYTES,
@@ -55,10 +58,23 @@ class Client:
         self._closed = False
 
     def call(
-        self, op: str, args: dict[str, Any] | None = None, timeout: float | None = None
+        self,
+        op: str,
+        args: dict[str, Any] | None = None,
+        timeout: float | None = None,
+        *,
+        work_s: float = 0.0,
     ) -> Any:
-        """Send request ``op`` with ``args`` and return the world's result (low level)."""
-        return self._channel.call(op, args, self.timeout if timeout is None else timeout)
+        """Send request ``op`` with ``args`` and return the world's result (low level).
+
+        Args:
+            timeout: wait for the world to take the request up and answer [s]
+                (:attr:`timeout` if None).
+            work_s: how long the work may take in the world once started [s] (a plan's
+                budget), waited for on top of ``timeout``.
+        """
+        wait = self.timeout if timeout is None else timeout
+        return self._channel.call(op, args, wait, work_s)
 
     def hello(self, timeout: float | None = None) -> dict[str, Any]:
         """Check that the world answers and speaks this client's protocol."""
@@ -130,20 +146,40 @@ class Client:
         """Take the arm ``name`` out of the world."""
         self.call("remove", {"name": name})
 
-    def move_together(self, targets: Mapping[str, Positions]) -> float:
-        """Start several arms on the same step so that they finish at the same instant.
+    def move_together(
+        self,
+        targets: Mapping[str, Positions],
+        *,
+        avoid_collisions: bool = False,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_PLANNING_TIMEOUT_S,
+    ) -> float:
+        """Start several arms on the same step so that they finish at the same instant,
+        as :meth:`armfleet.World.move_together`.
 
         Args:
             targets: per arm name, joint positions (one per ``arm.joint_names``) [rad or m].
+            avoid_collisions: plan the arms jointly around each other and everything
+                else, instead of each in a straight line; they must be at rest.
+            clearance_m: margin the plan keeps from other bodies [m], in [0.001, 0.5].
+            timeout_s: the plan's time budget [s], in [0.001, 60]; this call waits that
+                long on top of the client's timeout.
 
         Returns:
             The common duration [s].
 
         Raises:
             RemoteError: an unknown arm or any bad target; then no arm moves.
+            RemotePlanningFailed: with ``avoid_collisions``, no plan (a
+                :class:`~armfleet.planning.PlanningFailed`, with its ``reason``); no arm
+                moves.
+            InvalidFlag, InvalidNumber: ``avoid_collisions``, ``clearance_m`` or
+                ``timeout_s`` is invalid (nothing is sent).
         """
-        args = {"targets": {name: _floats(values) for name, values in targets.items()}}
-        return float(self.call("move_together", args)["duration_s"])
+        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
+        wire = {name: _floats(values) for name, values in targets.items()}
+        args = {"targets": wire, **planning}
+        return float(self.call("move_together", args, work_s=work_s)["duration_s"])
 
     # -- objects ----------------------------------------------------------------------
     @property

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import difflib
+from typing import Any
 
 from armfleet.bus import TOPIC_PATTERN
 from armfleet.errors import ArmfleetError
+from armfleet.planning.failure import FailureReason, PlanningFailed
 
 
 class ProtocolError(ArmfleetError):
@@ -51,6 +53,55 @@ class RemoteError(ArmfleetError):
     def __init__(self, kind: str, message: str) -> None:
         self.kind = kind
         super().__init__(message)
+
+
+class RemotePlanningFailed(RemoteError, PlanningFailed):
+    """A :class:`~armfleet.planning.PlanningFailed` the world reported for a request: no
+    collision-free motion was planned and nothing moved. ``except PlanningFailed`` catches
+    it as it catches the local one; its message is the world's one line.
+
+    Attributes:
+        reason, arms, links, samples, blocking_arm: as in the world's error
+            (``problem`` stays in the world: None).
+    """
+
+    def __init__(self, message: str, fields: dict[str, Any]) -> None:
+        # Not PlanningFailed.__init__, which composes a message: this one is the world's.
+        ArmfleetError.__init__(self, message)
+        self.kind = PlanningFailed.__name__
+        self.reason = FailureReason(fields["reason"])
+        self.arms = tuple(str(arm) for arm in fields.get("arms", ()))
+        links = tuple(str(link) for link in fields.get("links", ()))
+        self.links = (links[0], links[1]) if len(links) == 2 else ()
+        self.samples = int(fields.get("samples", 0))
+        blocking = fields.get("blocking_arm")
+        self.blocking_arm = None if blocking is None else str(blocking)
+        self.problem = None
+
+
+def error_fields(error: ArmfleetError) -> dict[str, Any] | None:
+    """What a client needs, beyond the type and message, to raise ``error`` again on its
+    side (None for errors that are their message)."""
+    if isinstance(error, PlanningFailed):
+        return {
+            "reason": error.reason.value,
+            "arms": list(error.arms),
+            "links": list(error.links),
+            "samples": error.samples,
+            "blocking_arm": error.blocking_arm,
+        }
+    return None
+
+
+def remote_error(kind: str, message: str, fields: Any) -> RemoteError:
+    """The client's error for an error reply: a :class:`RemotePlanningFailed` for a
+    ``PlanningFailed`` that came with its fields, else a :class:`RemoteError`."""
+    if kind == PlanningFailed.__name__ and isinstance(fields, dict):
+        try:
+            return RemotePlanningFailed(message, fields)
+        except (KeyError, ValueError, TypeError):
+            pass  # a world speaking other reasons: its message still says it all
+    return RemoteError(kind, message)
 
 
 class NoWorldFound(ArmfleetError):

@@ -1,4 +1,5 @@
-"""Services that manipulate: the gripper, Cartesian goals and time-synchronised moves.
+"""Services that manipulate: the gripper, Cartesian goals and time-synchronised moves
+(each straight, or planned around obstacles: see :mod:`armfleet.remote.planning_options`).
 
 As in :mod:`armfleet.remote.services`, each ``prepare_*`` checks the request in
 the server thread and returns work for the stepping thread; the world's own
@@ -19,6 +20,7 @@ from armfleet.messages import GripperMode
 from armfleet.remote.arguments import Arguments
 from armfleet.remote.codec import to_wire
 from armfleet.remote.errors import ProtocolError
+from armfleet.remote.planning_options import PlanningOptions
 from armfleet.world import World
 
 Work = Callable[[], Any]
@@ -104,6 +106,7 @@ class ManipulationServices:
         position = _sized(args, "position", 3) if args.has("position") else None
         frame, link = args.text("frame", "world"), args.text("link", "tool0")
         linear = args.flag("linear", False)
+        options = PlanningOptions.from_request("move_pose", args).keywords()
 
         def move_pose() -> dict[str, Any]:
             arm = world.arm(name)
@@ -112,7 +115,8 @@ class ManipulationServices:
                 if pose is not None
                 else _keeping_orientation(world, arm, position, frame, link)
             )
-            duration = arm.move_to_pose(goal, frame, link=link, linear=linear)
+            # linear together with avoid_collisions: the arm refuses it in its own words.
+            duration = arm.move_to_pose(goal, frame, link=link, linear=linear, **options)
             return {"time_s": world.time, "duration_s": duration, "moving": arm.is_moving}
 
         return move_pose
@@ -123,10 +127,11 @@ class ManipulationServices:
             raise ProtocolError("move_together: 'targets' is empty; give {arm: [q1, q2, ...]}")
         checked = Arguments("move_together", raw, list(raw), label="'targets'")
         targets = {str(name): checked.vector(name) for name in raw}
+        options = PlanningOptions.from_request("move_together", args).keywords()
         world = self._world
 
         def move_together() -> dict[str, Any]:
-            duration = world.move_together(targets)
+            duration = world.move_together(targets, **options)
             return {"time_s": world.time, "duration_s": duration, "arms": list(targets)}
 
         return move_together

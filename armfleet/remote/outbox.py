@@ -20,6 +20,7 @@ import zmq
 
 from armfleet.errors import ArmfleetError
 from armfleet.remote.codec import pack, to_wire
+from armfleet.remote.errors import error_fields
 from armfleet.remote.protocol import MAX_HELD_REPLY_BYTES, FrameKind
 
 logger = logging.getLogger("armfleet")
@@ -70,13 +71,20 @@ class Outbox:
         self._send_reply(peer, frame | {"result": to_wire(result)})
 
     def reply_error(self, peer: bytes, request_id: int | None, error: BaseException) -> None:
-        """Reply with ``error``: an ArmfleetError's own message, else an internal error."""
+        """Reply with ``error``: an ArmfleetError's own message (and the fields a client
+        rebuilds it from, see :func:`~armfleet.remote.errors.error_fields`), else an
+        internal error."""
+        details: dict[str, Any]
         if isinstance(error, ArmfleetError):
-            kind, message = type(error).__name__, str(error)
+            details = {"type": type(error).__name__, "message": str(error)}
+            fields = error_fields(error)
+            if fields is not None:
+                details["fields"] = fields
         else:
-            kind, message = "InternalError", f"internal error: {type(error).__name__}: {error}"
+            message = f"internal error: {type(error).__name__}: {error}"
+            details = {"type": "InternalError", "message": message}
         frame = {"kind": FrameKind.REPLY.value, "id": request_id, "ok": False}
-        self._send_reply(peer, frame | {"error": {"type": kind, "message": message}})
+        self._send_reply(peer, frame | {"error": details})
 
     def held(self, peer: bytes) -> int:
         """Replies to ``peer`` waiting for it to read."""

@@ -12,7 +12,10 @@ from armfleet.checks.flags import flag
 from armfleet.checks.real_numbers import all_real
 from armfleet.errors import ArmfleetError, NoGripper
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
+from armfleet.planning.problem import DEFAULT_CLEARANCE_M
+from armfleet.planning.problem import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
 from armfleet.remote.codec import decode_message
+from armfleet.remote.planning_options import planning_request
 from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.spawn_pose import SpawnPose
 
@@ -107,18 +110,46 @@ class RemoteArm:
     def is_moving(self) -> bool:
         return self.mode is ArmMode.MOVING
 
-    def move_to(self, positions: Positions) -> None:
+    def move_to(
+        self,
+        positions: Positions,
+        *,
+        avoid_collisions: bool = False,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_PLANNING_TIMEOUT_S,
+    ) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns once the world
-        has accepted them, at a step boundary.
+        has accepted them, at a step boundary, the planned duration of the motion [s].
+
+        Args:
+            avoid_collisions: go around everything in the world instead of in a
+                straight line (the arm must be at rest), as :meth:`armfleet.Arm.move_to`.
+            clearance_m: margin the plan keeps from other bodies [m], in [0.001, 0.5].
+            timeout_s: the plan's time budget [s], in [0.001, 60]; this call waits that
+                long on top of the client's timeout.
 
         Raises:
             RemoteError: the world refused them (wrong length, not finite, outside the
                 limits, protective stop...); the current motion goes on.
+            RemotePlanningFailed: with ``avoid_collisions``, no plan (a
+                :class:`~armfleet.planning.PlanningFailed`, with its ``reason``); nothing
+                moved.
+            InvalidFlag, InvalidNumber: a planning option is invalid (nothing is sent).
         """
-        self._client.call("move", {"name": self._name, "positions": self._vector(positions)})
+        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
+        args = {"name": self._name, "positions": self._vector(positions), **planning}
+        return float(self._client.call("move", args, work_s=work_s)["duration_s"])
 
     def move_to_pose(
-        self, pose: Any, frame: str = "world", *, link: str = "tool0", linear: bool = False
+        self,
+        pose: Any,
+        frame: str = "world",
+        *,
+        link: str = "tool0",
+        linear: bool = False,
+        avoid_collisions: bool = False,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float = DEFAULT_PLANNING_TIMEOUT_S,
     ) -> float:
         """Move ``link`` to ``pose`` in ``frame``; returns, once the world has accepted the
         goal, the planned duration [s].
@@ -129,18 +160,24 @@ class RemoteArm:
             frame: a frame of the world's TF tree (``world``, ``toby_tool0``, an object).
             link: the arm's link to place, unprefixed or prefixed.
             linear: follow a straight line from where the link is (from rest).
+            avoid_collisions, clearance_m, timeout_s: plan around everything in the
+                world, as :meth:`move_to` (not with ``linear``).
 
         Raises:
             RemoteError: the world refused it (``UnreachablePose``, ``ArmInMotion``,
-                ``UnknownFrame``...); nothing moved and the current motion goes on.
+                ``UnknownFrame``, ``linear`` with ``avoid_collisions``...); nothing moved
+                and the current motion goes on.
+            RemotePlanningFailed: with ``avoid_collisions``, no plan; nothing moved.
         """
         linear = flag(linear, "linear")
+        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
         if isinstance(pose, pin.SE3):
             pose = pose.homogeneous  # the world checks it is a rigid transform
         values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")
         key = "position" if np.ndim(pose) == 1 else "pose"
         args = {"name": self._name, key: values, "frame": frame, "link": link, "linear": linear}
-        return float(self._client.call("move_pose", args)["duration_s"])
+        args |= planning
+        return float(self._client.call("move_pose", args, work_s=work_s)["duration_s"])
 
     def wait(self, timeout: float = WAIT_TIMEOUT_S) -> JointState:
         """Block until the motion is over and the arm holds its target; return its state.

@@ -10,7 +10,7 @@ from typing import Any
 import zmq
 
 from armfleet.remote.codec import pack, unpack
-from armfleet.remote.errors import ConnectionLost, RemoteError, RequestTimeout
+from armfleet.remote.errors import ConnectionLost, RemoteError, RequestTimeout, remote_error
 from armfleet.remote.protocol import FrameKind
 
 #: Share of a request's timeout the world may keep it queued before refusing it,
@@ -35,12 +35,21 @@ class RequestChannel:
         self._lock = threading.Lock()
         self._closed = False
 
-    def call(self, op: str, args: dict[str, Any] | None, timeout: float) -> Any:
+    def call(
+        self, op: str, args: dict[str, Any] | None, timeout: float, work_s: float = 0.0
+    ) -> Any:
         """Send request ``op`` and return its result.
+
+        Args:
+            timeout: wait for the world to take the request up and answer [s]; the
+                world refuses it, unapplied, if it has not started it within
+                :data:`QUEUE_SHARE` of this.
+            work_s: how long the work itself may take once started (a plan's time
+                budget) [s], waited for on top of ``timeout``.
 
         Raises:
             RemoteError: the world refused it (its message says why).
-            RequestTimeout: no reply within ``timeout`` [s].
+            RequestTimeout: no reply within ``timeout + work_s`` [s].
         """
         with self._lock:
             if self._closed:
@@ -52,7 +61,10 @@ class RequestChannel:
                 "args": args or {},
                 "timeout_s": timeout * QUEUE_SHARE,
             }
-            deadline = time.monotonic() + timeout
+            # The queue share is of ``timeout`` alone: work that starts late must still
+            # have its whole budget before this side gives up on it.
+            wait = timeout + work_s
+            deadline = time.monotonic() + wait
             try:
                 self._socket.send(pack(frame), zmq.NOBLOCK)
             except zmq.Again:
@@ -63,7 +75,7 @@ class RequestChannel:
                 remaining = deadline - time.monotonic()
                 if remaining <= 0 or not self._socket.poll(max(1, round(remaining * 1000))):
                     raise RequestTimeout(
-                        f"{op}: no answer from the world at {self.address} within {timeout:g} s"
+                        f"{op}: no answer from the world at {self.address} within {wait:g} s"
                         + ("" if op in _READ_ONLY else "; it may still be applied")
                     )
                 reply = unpack(self._socket.recv())
@@ -88,4 +100,5 @@ def _result(reply: dict[str, Any]) -> Any:
     error = reply.get("error")
     if not isinstance(error, dict):
         raise RemoteError("ProtocolError", f"malformed error reply: {reply!r:.200}")
-    raise RemoteError(str(error.get("type", "Error")), str(error.get("message", "")))
+    kind, message = str(error.get("type", "Error")), str(error.get("message", ""))
+    raise remote_error(kind, message, error.get("fields"))

@@ -23,6 +23,7 @@ from armfleet.remote.codec import to_wire
 from armfleet.remote.errors import UnknownService, UnknownTopic
 from armfleet.remote.manipulation_services import ManipulationServices, describe_gripper
 from armfleet.remote.object_services import ObjectServices
+from armfleet.remote.planning_options import PLANNING_FIELDS, PlanningOptions
 from armfleet.remote.protocol import Service, armfleet_version
 from armfleet.remote.run_state import RunState
 from armfleet.remote.subscription_queue import SubscriptionQueue
@@ -44,9 +45,9 @@ FIELDS: dict[Service, tuple[str, ...]] = {
     Service.LOOKUP: ("target", "source"),
     Service.SPAWN: ("name", "model", "at", "initial_positions", "parameters"),
     Service.REMOVE: ("name",),
-    Service.MOVE: ("name", "positions"),
-    Service.MOVE_POSE: ("name", "pose", "position", "frame", "link", "linear"),
-    Service.MOVE_TOGETHER: ("targets",),
+    Service.MOVE: ("name", "positions", *PLANNING_FIELDS),
+    Service.MOVE_POSE: ("name", "pose", "position", "frame", "link", "linear", *PLANNING_FIELDS),
+    Service.MOVE_TOGETHER: ("targets", *PLANNING_FIELDS),
     Service.GRIP: ("name", "action", "width", "force"),
     Service.WAIT: ("name", "timeout_s", "gripper"),
     Service.RESET: ("name", "stop_only"),
@@ -187,11 +188,12 @@ class WorldServices:
 
     def prepare_move(self, args: Arguments) -> Work:
         name, positions, world = args.text("name"), args.vector("positions"), self._world
+        options = PlanningOptions.from_request("move", args).keywords()
 
         def move() -> dict[str, Any]:
             arm = world.arm(name)
-            arm.move_to(positions)
-            return {"time_s": world.time, "moving": arm.is_moving}
+            duration = arm.move_to(positions, **options)
+            return {"time_s": world.time, "duration_s": duration, "moving": arm.is_moving}
 
         return move
 
