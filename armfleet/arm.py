@@ -341,10 +341,12 @@ class Arm:
             raise ArmfleetError(f"{self._name} is not in a world that plans")
         return self._planner
 
+    @while_alive
     def publish_planned(self, motion: PlannedMotion) -> None:
         """Announce a planned motion on ``/<name>/planned_motion`` (the planner does)."""
         self._bus.publish(f"{self.namespace}/planned_motion", motion)
 
+    @while_alive
     def follow_motion(self, motion: SampledMotion) -> None:
         """Follow ``motion`` (one row per controller period) from the next step, its last
         row published as the command for the record (the planner does this)."""
@@ -352,6 +354,7 @@ class Arm:
         self._publish_command(motion.position[-1])
         self._position_controller.follow_samples(motion)
 
+    @while_alive
     def tool_position(self, positions: FloatArray) -> FloatArray:
         """World position of tool0 with the arm joints at ``positions`` [m]."""
         q = self._body.position.copy()
