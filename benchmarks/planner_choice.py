@@ -28,6 +28,7 @@ import armfleet
 import argparse
 import enum
 import itertools
+import os
 import json
 import platform
 import statistics
@@ -85,6 +86,7 @@ class Attempt:
         touches_own_model: the same, re-checked with the planner's own collision model.
         checks: state checks made by the planner (search and shortening), where it can tell.
         check_ms: wall time spent in those checks [ms].
+        recheck_ms: wall time of the fine re-check of the returned path [ms].
         error: why nothing came back.
     """
 
@@ -99,6 +101,7 @@ class Attempt:
     touches_own_model: bool | None = None
     checks: int | None = None
     check_ms: float | None = None
+    recheck_ms: float | None = None
     error: str = ""
 
 
@@ -330,6 +333,7 @@ def summarise(attempts: list[Attempt]) -> dict[str, Any]:
         if solved
         else None,
         "touching_paths_own_model": sum(bool(a.touches_own_model) for a in solved),
+        "recheck_ms_median": round(percentile([a.recheck_ms or 0 for a in solved], 50), 2),
     }
     checks = [a.checks for a in solved if a.checks is not None]
     if checks:
@@ -380,6 +384,7 @@ def planners(world: armfleet.World, cell: CellModel, seed: int) -> dict[Planner,
 
 
 def run(count: int, seed: int) -> dict[str, Any]:
+    load_at_start = [round(x, 2) for x in os.getloadavg()]  # other work on the machine
     ou.setLogLevel(ou.LogLevel.LOG_ERROR)
     ou.RNG.setSeed(seed)
     world = armfleet.launch(SPEC, viewer=False)
@@ -407,7 +412,9 @@ def run(count: int, seed: int) -> dict[str, Any]:
             attempt, states = planner.attempt(problem)
             if attempt.solved:
                 attempt.length_ratio = round(path_length(states) / straight_length, 4)
+                started = time.perf_counter()
                 hit = reference.first_contact_on_path(problem.q_full, indices, states, fine)
+                attempt.recheck_ms = (time.perf_counter() - started) * 1e3
                 attempt.touches = hit is not None
                 if isinstance(planner, RoboPlanPlanner):
                     attempt.touches_own_model = planner.touches(problem, states, fine)
@@ -423,7 +430,13 @@ def run(count: int, seed: int) -> dict[str, Any]:
     ]
     everything = [hit for hits in straight.values() for hit in hits]
     return {
-        "machine": {"python": platform.python_version(), "processor": platform.machine()},
+        "machine": {
+            "python": platform.python_version(),
+            "processor": platform.machine(),
+            "cpus": os.cpu_count(),
+            "load_average_at_start": load_at_start,
+            "load_average_at_end": [round(x, 2) for x in os.getloadavg()],
+        },
         "settings": {
             "spec": SPEC.name,
             "problems": count,
@@ -450,6 +463,11 @@ def print_report(figures: dict[str, Any]) -> None:
         f"{settings['timeout_s']} s, motion checks every {settings['motion_check_resolution']:.1%}"
         f" of the state space's extent; every returned path re-checked every "
         f"{settings['fine_recheck_resolution']:.1%}, without margin"
+    )
+    machine = figures["machine"]
+    print(
+        f"{machine['cpus']} CPUs, load average {machine['load_average_at_start'][0]} at the "
+        f"start, {machine['load_average_at_end'][0]} at the end"
     )
     print(
         f"collision models (reference, RoboPlan's) disagree on "
