@@ -1,0 +1,411 @@
+"""Two arms swap cubes across one table, planning around each other, the post and the walls.
+
+    python examples/shared_cell.py                  # in the viewer (open the printed URL)
+    python examples/shared_cell.py --no-viewer      # headless; exit status 1 if a goal is missed
+    python examples/shared_cell.py --cubes 6 --seed 3
+
+The scene is launch_specs/shared_cell.yaml: bob at (0, 0) and toby at (0.9, 0) facing
+each other over a table split by a post and two low walls. Bob's cubes start on his
+half (x < 0.45 m) and end on toby's; toby's go the other way. The spec's four cubes
+are re-placed and the rest added with ``world.add_object``.
+
+Every motion between table positions is planned (``avoid_collisions``). Picks and
+places run in parallel: an arm plans while the other moves, and the planner checks the
+plan in time against the other arm's motion. The crossings are planned jointly
+(``world.move_together``), in the two arms' 14-joint space, because each arm's goal is
+where the other arm is. The straight moves down to a cube and back up (MoveIt's
+approach and retreat; a plan keeps 1 cm from everything, so it cannot end with the
+fingers round a cube) and opening a gripper are not planned: an arm starts one only
+while the other arm stands still, so any plan made meanwhile sees it moving.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import armfleet
+from armfleet.messages import CollisionReport
+from armfleet.planning import PlanningFailed, PoseGoal
+
+CUBE_M = 0.04  # side of a cube
+CUBE_KG = 0.1
+CUBE_Z_M = 0.17  # a cube's centre resting on the table (top at 0.15 m)
+MIDDLE_X_M = 0.45  # the table's middle line, between bob's half and toby's
+#: Cube spots on bob's half (x, y) [m]; toby's are mirrored about the middle line.
+#: 11 cm apart across the fingers (open: 8 cm), clear of the post and the walls.
+SPOTS_M = tuple((x, y) for x in (0.29, 0.37) for y in (-0.38, -0.27, -0.16, 0.16, 0.27, 0.38))
+MAX_CUBES = 2 * len(SPOTS_M)
+ABOVE_M = 0.06  # approach and leave every cube from this high
+DROP_M = 0.002  # a cube is let go this far above the table
+JITTER_M, JITTER_DEG = 0.005, 10.0  # random start of each cube around its spot
+TOLERANCE_M = 0.01  # a cube's centre ends this close to its spot (a quarter of its side)
+GRIP_S = 0.5  # time for the fingers to close or open
+SETTLE_S = 0.1  # wait after a motion's planned duration
+POLL_S = 0.02  # how often a waiting arm looks again
+RETRY_S = 0.25  # wait before planning again when the other arm is in the way
+ATTEMPTS = 40  # plans tried for one motion before giving up
+DOWN = np.diag([1.0, -1.0, -1.0, 1.0])  # tcp z down, x along the frame's x
+COLOURS = ((0.85, 0.2, 0.2, 1.0), (0.2, 0.6, 0.85, 1.0))  # bob's cubes, toby's cubes
+
+#: A task yields the simulated time [s] to wait before it goes on.
+Task = Iterator[float]
+
+
+def frame(xyz: tuple[float, float, float], yaw: float = 0.0) -> np.ndarray:
+    """4x4 pose at ``xyz`` [m], turned by ``yaw`` [rad] about z."""
+    pose = np.eye(4)
+    pose[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
+    pose[:3, 3] = xyz
+    return pose
+
+
+def lifted(pose: np.ndarray, height: float = ABOVE_M) -> np.ndarray:
+    raised = pose.copy()
+    raised[2, 3] += height
+    return raised
+
+
+def spot(side: str, index: int) -> np.ndarray:
+    """The ``index``-th cube spot on ``side``'s half of the table (x, y) [m]."""
+    x, y = SPOTS_M[index]
+    return np.array([x, y] if side == "bob" else [2 * MIDDLE_X_M - x, y])
+
+
+@dataclass
+class Cube:
+    """A cube, the arm that moves it, and the spot where it must end."""
+
+    name: str
+    arm: str
+    target: np.ndarray  # (x, y) [m]
+
+    def error_m(self, world: armfleet.World) -> float:
+        """Distance from the cube's centre to its target spot on the table [m]."""
+        wanted = np.array([*self.target, CUBE_Z_M])
+        return float(np.linalg.norm(world.object(self.name).position - wanted))
+
+
+@dataclass
+class Tally:
+    """Contacts seen on /collisions, protective stops, and the plans made."""
+
+    arm_arm: int = 0  # new contacts between two arms
+    arm_obstacle: int = 0  # new contacts of an arm with a static object or the floor
+    replans: int = 0  # plans refused (the other arm in the way), then tried again
+    planning_ms: list[float] = field(default_factory=list)
+    _touching: set[tuple[str, str]] = field(default_factory=set)
+
+    def on_collisions(self, world: armfleet.World, report: CollisionReport) -> None:
+        """Count each contact once, when it starts (a /collisions subscriber)."""
+        arms, objects = world.arms, world.objects
+        now: set[tuple[str, str]] = set()
+        for contact in report.contacts:
+            a, b = contact.body_a, contact.body_b
+            if a not in arms and b not in arms:
+                continue
+            other = b if a in arms else a
+            if other in objects and not objects[other].is_static:
+                continue  # a cube: what the arms are for
+            now.add(contact.pair)
+            if contact.pair in self._touching:
+                continue
+            if a in arms and b in arms:
+                self.arm_arm += a != b
+            else:
+                self.arm_obstacle += 1
+        self._touching = now
+
+
+class Cell:
+    """The shared cell: its world, the cubes and the arms' tasks."""
+
+    def __init__(self, world: armfleet.World, tally: Tally, *, realtime: bool) -> None:
+        self.world = world
+        self.tally = tally
+        self.realtime = realtime
+
+    # -- running tasks side by side --------------------------------------------------------
+    def run(self, *tasks: Task) -> None:
+        """Step the world until every task is done, resuming each when its wait is over."""
+        world = self.world
+        wake = {index: world.time for index in range(len(tasks))}
+        while wake:
+            for index in list(wake):
+                if wake[index] <= world.time + world.dt / 2:
+                    try:
+                        wake[index] = world.time + next(tasks[index])
+                    except StopIteration:
+                        del wake[index]
+            if wake:
+                world.run(max(min(wake.values()) - world.time, world.dt), realtime=self.realtime)
+
+    # -- motions ---------------------------------------------------------------------------
+    def planned(self, arm: armfleet.Arm, pose: np.ndarray) -> Task:
+        """Move ``arm``'s tcp to ``pose`` around everything, trying again while the other
+        arm is in the way."""
+        for attempt in range(ATTEMPTS):
+            try:
+                plan = arm.plan(pose, link="tcp")
+            except PlanningFailed:
+                if attempt == ATTEMPTS - 1:
+                    raise
+                self.tally.replans += 1
+                yield RETRY_S
+                continue
+            self.tally.planning_ms.append(plan.planning_time_s * 1000)
+            yield self.world.execute(plan) + SETTLE_S
+            return
+
+    def together(self, targets: dict[str, PoseGoal | tuple[float, ...]]) -> Task:
+        """Move the arms to ``targets`` (tcp poses or joint positions), planned jointly."""
+        for attempt in range(ATTEMPTS):
+            try:
+                plan = self.world.plan(targets, timeout_s=2.0)
+            except PlanningFailed:
+                if attempt == ATTEMPTS - 1:
+                    raise
+                self.tally.replans += 1
+                yield RETRY_S
+                continue
+            self.tally.planning_ms.append(plan.planning_time_s * 1000)
+            yield self.world.execute(plan) + SETTLE_S
+            return
+
+    def still_others(self, arm: armfleet.Arm) -> Task:
+        """Wait until every other arm stands still."""
+        while any(o.is_moving for o in self.world.arms.values() if o is not arm):
+            yield POLL_S
+
+    def straight(self, arm: armfleet.Arm, pose: np.ndarray) -> Task:
+        """A straight tcp move, started while the other arm stands still."""
+        yield from self.still_others(arm)
+        yield arm.move_to_pose(pose, link="tcp", linear=True) + SETTLE_S
+
+    def grip(self, arm: armfleet.Arm, close: bool) -> Task:
+        if close:
+            arm.gripper.close()  # the fingers only move inwards: no wait
+        else:
+            yield from self.still_others(arm)  # opening widens the hand
+            arm.gripper.open()
+        yield GRIP_S
+
+    # -- pick and place --------------------------------------------------------------------
+    def grasp(self, arm: armfleet.Arm, cube: Cube) -> np.ndarray:
+        """Tcp pose holding ``cube`` from above, as the cube is now on /tf, turned by a
+        multiple of 90 degrees to face the way the arm does."""
+        pose = self.world.tf.lookup("world", cube.name)
+        facing = math.radians(arm.pose.yaw_deg)
+        turn = math.atan2(pose[1, 0], pose[0, 0]) - facing
+        turn -= math.pi / 2 * round(turn / (math.pi / 2))
+        x, y, z = pose[:3, 3]
+        return frame((x, y, z), facing + turn) @ DOWN
+
+    def pick(self, arm: armfleet.Arm, cube: Cube) -> Task:
+        pose = self.grasp(arm, cube)
+        yield from self.planned(arm, lifted(pose))
+        yield from self.straight(arm, pose)
+        yield from self.grip(arm, close=True)
+        yield from self.straight(arm, lifted(pose))
+
+    def place_pose(self, arm: armfleet.Arm, cube: Cube) -> np.ndarray:
+        """Tcp pose that sets the held ``cube`` down on its target spot."""
+        world = self.world
+        tcp = world.tf.lookup("world", f"{arm.name}_tcp")
+        cube_in_tcp = np.linalg.solve(tcp, world.tf.lookup("world", cube.name))
+        where = frame((*cube.target, CUBE_Z_M + DROP_M), math.radians(arm.pose.yaw_deg))
+        pose: np.ndarray = where @ np.linalg.inv(cube_in_tcp)
+        return pose
+
+    def place(self, arm: armfleet.Arm, pose: np.ndarray) -> Task:
+        yield from self.straight(arm, pose)
+        yield from self.grip(arm, close=False)
+        yield from self.straight(arm, lifted(pose))
+
+    def place_and_pick(
+        self, arm: armfleet.Arm, carried: tuple[Cube, np.ndarray] | None, cube: Cube | None
+    ) -> Task:
+        """Put the ``carried`` cube down at its pose (if any), then pick ``cube`` (if any)."""
+        if carried is not None:
+            yield from self.place(arm, carried[1])
+        if cube is not None:
+            yield from self.pick(arm, cube)
+
+
+def swap_spots(count: int, rng: np.random.Generator) -> list[tuple[int, int]]:
+    """Per round, the spot (index in :data:`SPOTS_M`) bob picks from and toby's spot whose
+    cube toby picks; the arms then swap them. The two lie on opposite sides of y = 0 (so
+    the arms reach past each other, not into each other) and the sides alternate."""
+    sides = [[i for i, (_, y) in enumerate(SPOTS_M) if (y > 0) == positive] for positive in (0, 1)]
+    bob_order = [list(rng.permutation(side)) for side in sides]
+    toby_order = [list(rng.permutation(side)) for side in sides]
+    pairs = []
+    for rank in range((count + 1) // 2):
+        side = rank % 2  # bob's spot on this side of y = 0, toby's on the other
+        pairs.append((int(bob_order[side][rank // 2]), int(toby_order[1 - side][rank // 2])))
+    return pairs
+
+
+def set_out_cubes(world: armfleet.World, count: int, rng: np.random.Generator) -> list[Cube]:
+    """Put ``count`` cubes on the table, bob's on his half and toby's on his, each with the
+    spot where it must end. The spec's cubes are re-used (the ones not needed are taken
+    away); the others are added."""
+    spare = sorted(name for name in world.objects if name.startswith("cube_"))
+    cubes: list[Cube] = []
+    for bob_spot, toby_spot in swap_spots(count, rng):
+        for arm, start, end in (("bob", bob_spot, toby_spot), ("toby", toby_spot, bob_spot)):
+            if len(cubes) == count:
+                break
+            other = "toby" if arm == "bob" else "bob"
+            x, y = spot(arm, start) + rng.uniform(-JITTER_M, JITTER_M, 2)
+            rpy = (0.0, 0.0, rng.uniform(-JITTER_DEG, JITTER_DEG))
+            name = f"cube_{len(cubes) + 1}"
+            if name in spare:
+                spare.remove(name)
+                world.object(name).set_pose((x, y, CUBE_Z_M), rpy)
+            else:
+                world.add_object(
+                    name,
+                    "box",
+                    size=(CUBE_M, CUBE_M, CUBE_M),
+                    mass=CUBE_KG,
+                    color=COLOURS[arm == "toby"],
+                    at=(x, y, CUBE_Z_M),
+                    rpy_deg=rpy,
+                )
+            cubes.append(Cube(name, arm, spot(other, end)))
+    for name in spare:
+        world.remove_object(name)
+    return cubes
+
+
+def swap(cell: Cell, cubes: list[Cube], *, quiet: bool) -> None:
+    """Move every cube to the other half, round by round: each arm puts down the cube it
+    carried over and picks its next one while the other does the same; then both carry
+    their cubes across together."""
+    world = cell.world
+    arms = {name: world.arm(name) for name in ("bob", "toby")}
+    queues = {name: [c for c in cubes if c.arm == name] for name in arms}
+    cell.run(*(cell.grip(arm, close=False) for arm in arms.values()))
+    carried: dict[str, tuple[Cube, np.ndarray]] = {}  # arm -> cube held over its spot
+    for rank in range(max(len(queue) for queue in queues.values()) + 1):
+        batch = {name: queue[rank] for name, queue in queues.items() if rank < len(queue)}
+        cell.run(*(cell.place_and_pick(arms[n], carried.get(n), batch.get(n)) for n in arms))
+        if carried and not quiet:
+            moved = ", ".join(
+                f"{c.name} {c.error_m(world) * 1000:.1f} mm" for c, _ in carried.values()
+            )
+            print(f"t = {world.time:6.1f} s: {moved} from its target", flush=True)
+        carried = {name: (cube, cell.place_pose(arms[name], cube)) for name, cube in batch.items()}
+        if carried:
+            cell.run(
+                cell.together(
+                    {n: PoseGoal(lifted(pose), "world", "tcp") for n, (_, pose) in carried.items()}
+                )
+            )
+    cell.run(cell.together({name: arm.description.home for name, arm in arms.items()}))
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one run achieved; :attr:`success` is the example's goal."""
+
+    seed: int
+    cubes: int
+    placed: int  # cubes within TOLERANCE_M of their target spot
+    worst_error_m: float
+    arm_arm_contacts: int
+    arm_obstacle_contacts: int
+    stops: int
+    replans: int
+    plans: int
+    median_planning_ms: float
+    simulated_s: float
+    wall_s: float
+    gave_up: str = ""  # a motion that could not be planned in ATTEMPTS tries
+
+    @property
+    def success(self) -> bool:
+        return (
+            not self.gave_up
+            and self.placed == self.cubes
+            and self.arm_arm_contacts == 0
+            and self.arm_obstacle_contacts == 0
+            and self.stops == 0
+        )
+
+    def __str__(self) -> str:
+        lines = [
+            f"cubes on the other half within {TOLERANCE_M * 1000:.0f} mm: "
+            f"{self.placed}/{self.cubes} (worst {self.worst_error_m * 1000:.1f} mm)",
+            f"contacts arm-arm: {self.arm_arm_contacts}, arm-obstacle: "
+            f"{self.arm_obstacle_contacts}; protective stops: {self.stops}",
+            f"plans: {self.plans} (median {self.median_planning_ms:.0f} ms), "
+            f"refused and tried again: {self.replans}",
+            f"simulated {self.simulated_s:.1f} s in {self.wall_s:.1f} s (seed {self.seed})",
+        ]
+        if self.gave_up:
+            lines.append(f"gave up: {self.gave_up}")
+        lines.append("success" if self.success else "FAILED")
+        return "\n".join(lines)
+
+
+def run(cubes: int = 20, seed: int = 0, *, viewer: bool = False, quiet: bool = False) -> Outcome:
+    """Launch the cell, swap ``cubes`` cubes (placed by ``seed``), and say how it went."""
+    began = time.perf_counter()
+    world = armfleet.launch("shared_cell", viewer=viewer)
+    try:
+        if viewer and world.viewer is not None:
+            print(f"viewer: {world.viewer.url}", flush=True)
+        placed = set_out_cubes(world, cubes, np.random.default_rng(seed))
+        tally = Tally()
+        world.bus.subscribe("/collisions", lambda report: tally.on_collisions(world, report))
+        gave_up = ""
+        try:
+            swap(Cell(world, tally, realtime=viewer), placed, quiet=quiet)
+        except PlanningFailed as exc:
+            gave_up = str(exc)
+        errors = [cube.error_m(world) for cube in placed]
+        return Outcome(
+            seed=seed,
+            cubes=cubes,
+            placed=sum(e <= TOLERANCE_M for e in errors),
+            worst_error_m=max(errors),
+            arm_arm_contacts=tally.arm_arm,
+            arm_obstacle_contacts=tally.arm_obstacle,
+            stops=world.safety.stops,
+            replans=tally.replans,
+            plans=len(tally.planning_ms),
+            median_planning_ms=float(np.median(tally.planning_ms)) if tally.planning_ms else 0,
+            simulated_s=world.time,
+            wall_s=time.perf_counter() - began,
+            gave_up=gave_up,
+        )
+    finally:
+        world.close()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--no-viewer", action="store_true", help="run headless")
+    parser.add_argument(
+        "--cubes", type=int, default=20, help=f"cubes to move, 1 to {MAX_CUBES} (default 20)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="where the cubes start (default 0)")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    args = parser.parse_args()
+    if not 1 <= args.cubes <= MAX_CUBES:
+        parser.error(f"--cubes must be in [1, {MAX_CUBES}] (there are {MAX_CUBES} spots)")
+    outcome = run(args.cubes, args.seed, viewer=not args.no_viewer, quiet=args.quiet)
+    print(outcome)
+    sys.exit(0 if outcome.success else 1)
+
+
+if __name__ == "__main__":
+    main()
