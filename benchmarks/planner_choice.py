@@ -9,13 +9,16 @@ Same collision model on both sides: the arms' collision meshes, the spec's objec
 as primitives, the floor, and the same pairs left out (benchmarks/cell_model.py). On
 random states the two models agree (checked at start, printed). OMPL checks states
 through Pinocchio's broadphase with a margin; RoboPlan has no margin option, so it
-plans against plain contact. Both check motions at the same resolution.
+plans against plain contact. Both check motions at the same resolution. Three more
+rows separate the library from the settings: OMPL without margin (RoboPlan's
+model exactly), OMPL with a cheap shortening pass instead of simplifyMax, and
+RoboPlan checking motions 5x finer.
 
 Every returned path is re-checked at a fine resolution without margin against the
 reference model: a path that touches something there would hit it in PyBullet.
 It prints the table and the ratios and writes benchmarks/results/planner_choice.json.
 
-    python benchmarks/planner_choice.py                 # 200 problems (~3 minutes)
+    python benchmarks/planner_choice.py                 # 200 problems (~2 minutes)
     python benchmarks/planner_choice.py --short         # 6 problems (CI)
     python benchmarks/planner_choice.py --problems 400
 """
@@ -28,8 +31,8 @@ import armfleet
 import argparse
 import enum
 import itertools
-import os
 import json
+import os
 import platform
 import statistics
 import sys
@@ -42,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from armfleet.messages import FloatArray
+from armfleet.objects import Shape
 from cell_model import CellModel, Checker  # benchmarks/ is the script's folder
 from cell_problems import CellProblem, ProblemSet
 
@@ -208,16 +212,16 @@ class RoboPlanPlanner:
         self.name = name
         self._resolution = resolution
         scene = rp_core.Scene("cell", rp_core.loadUrdfSceneDescriptionFromXml(one_urdf(world)))
-        for name, thing in world.objects.items():
+        for label, thing in world.objects.items():  # as cell_model: boxes, cylinders, spheres
             spec, color = thing.spec, np.array(thing.color)
-            if spec.shape.value == "box":
-                scene.addBoxGeometry(name, "world", rp_core.Box(*spec.size), thing.pose, color)
-            elif spec.shape.value == "cylinder":
+            if spec.shape is Shape.BOX:
+                scene.addBoxGeometry(label, "world", rp_core.Box(*spec.size), thing.pose, color)
+            elif spec.shape is Shape.CYLINDER:
                 cylinder = rp_core.Cylinder(*spec.size)
-                scene.addCylinderGeometry(name, "world", cylinder, thing.pose, color)
+                scene.addCylinderGeometry(label, "world", cylinder, thing.pose, color)
             else:
                 sphere = rp_core.Sphere(spec.size[0])
-                scene.addSphereGeometry(name, "world", sphere, thing.pose, color)
+                scene.addSphereGeometry(label, "world", sphere, thing.pose, color)
         floor = np.eye(4)
         floor[2, 3] = -0.05  # a 10 cm slab whose top is the floor
         scene.addBoxGeometry("floor", "world", rp_core.Box(10, 10, 0.1), floor, np.ones(4))
