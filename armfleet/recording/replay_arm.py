@@ -1,7 +1,8 @@
 """A recorded arm, standing in for a live :class:`~armfleet.arm.Arm` in the MeshCat viewer.
 
 The viewer reads an arm's name, description, kinematics, current joint
-positions, whether it moves, and its bus (for the target marker): this class
+positions, whether it moves, and its bus (for the target marker and the planned
+path): this class
 has exactly that, built from the recorded URDF, with positions set by the
 replay instead of a physics engine.
 
@@ -72,10 +73,14 @@ class _ControllerContext:
 
 
 class _PositionController:
-    """Where the viewer finds the bus carrying the arm's targets."""
+    """Where the viewer finds the bus carrying the arm's targets and plans, and whether
+    the arm moves (from its recorded status) or is in protective stop (never: a replayed
+    stop shows as the arm no longer moving)."""
 
     def __init__(self, bus: Bus) -> None:
         self.arm = _ControllerContext(bus)
+        self.is_moving = False
+        self.stop_reason: str | None = None
 
 
 class ReplayArm:
@@ -102,8 +107,16 @@ class ReplayArm:
             raise RecordingError(f"cannot rebuild {record.name} from its URDF: {exc}") from None
         self.body = _Joints(self.kinematics.model.nq)
         self.position_controller = _PositionController(bus)
-        self.is_moving = False
         self._order: dict[tuple[str, ...], np.ndarray] = {}
+
+    @property
+    def is_moving(self) -> bool:
+        """Whether the arm moves, as its recorded status says (set by the replay)."""
+        return self.position_controller.is_moving
+
+    @is_moving.setter
+    def is_moving(self, moving: bool) -> None:
+        self.position_controller.is_moving = moving
 
     @property
     def joint_names(self) -> tuple[str, ...]:

@@ -26,7 +26,6 @@ from __future__ import annotations
 import logging
 import math
 import threading
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -94,22 +93,39 @@ def plan_end_s(plan: PlannedMotion) -> float:
     return end if math.isfinite(end) else math.inf
 
 
-@dataclass
 class _Line:
-    """A plan drawn (or about to be) for one arm."""
+    """A plan drawn (or about to be) for one arm, and what ends it."""
 
-    plan: PlannedMotion
-    goal: FloatArray | None
-    end_s: float
-    seen_moving: bool = False
+    __slots__ = ("controller", "end_s", "goal", "plan", "seen_moving")
+
+    def __init__(self, plan: PlannedMotion, controller: Any) -> None:
+        self.plan = plan
+        self.goal = plan_goal(plan)
+        self.end_s = plan_end_s(plan)
+        #: The arm's position controller: ``is_moving`` and ``stop_reason`` are read.
+        self.controller = controller
+        self.seen_moving = False
+
+    def over(self, time_s: float) -> bool:
+        """Whether the motion is over at ``time_s``: its time is up, the arm is in
+        protective stop, or the arm, seen moving since the line was drawn, stands still."""
+        if time_s >= self.end_s:
+            return True
+        controller = self.controller
+        if controller.stop_reason is not None:
+            return True
+        if controller.is_moving:
+            self.seen_moving = True
+            return False
+        return self.seen_moving
 
 
 class _Follower:
     """One arm's subscriptions."""
 
     def __init__(self, arm: Arm, owner: PlanLines) -> None:
-        self.arm = arm
-        bus = arm.position_controller.arm.bus
+        self.controller = arm.position_controller
+        bus = self.controller.arm.bus
         name = arm.name
         self.subscriptions: list[Subscription] = [
             bus.subscribe(
@@ -130,6 +146,10 @@ class _Follower:
 class PlanLines:
     """The planned-motion lines of one viewer's arms.
 
+    What it reads from an arm (a recording's replay passes look-alikes): ``name``,
+    ``namespace`` and ``position_controller`` with ``arm.bus``, ``is_moving`` and
+    ``stop_reason``.
+
     Args:
         visualizer: the viewer's ``meshcat.Visualizer`` (root ``/meshcat``).
     """
@@ -142,24 +162,22 @@ class PlanLines:
         self._incoming: dict[str, _Line] = {}
         #: Arms whose line must go at the next tick (re-targeted).
         self._cancelled: set[str] = set()
-        #: Lines on show.
+        #: Whether ``_incoming`` or ``_cancelled`` hold anything.
+        self._events = False
+        #: Lines on show; changed by the tick only, read by the callbacks under the lock.
         self._shown: dict[str, _Line] = {}
-        self._busy = False
+        #: The same, as the tick walks it.
+        self._on_show: tuple[tuple[str, _Line], ...] = ()
 
     @property
     def busy(self) -> bool:
         """Whether a line is on show or something about one waits for the next tick."""
-        return self._busy
+        return self._events or bool(self._on_show)
 
     @property
     def shown(self) -> dict[str, PlannedMotion]:
         """The plans whose line is on show, by arm."""
-        with self._lock:
-            return {name: line.plan for name, line in self._shown.items()}
-
-    def path(self, name: str) -> str:
-        """MeshCat path of arm ``name``'s line."""
-        return f"/meshcat/armfleet/{name}/{NODE}"
+        return {name: line.plan for name, line in self._on_show}
 
     # -- arms --------------------------------------------------------------------------
     def follow(self, arm: Arm) -> None:
@@ -177,8 +195,9 @@ class PlanLines:
             follower = self._followers.pop(name, None)
             self._incoming.pop(name, None)
             self._cancelled.discard(name)
+            self._events = bool(self._incoming or self._cancelled)
             self._shown.pop(name, None)
-            self._update_busy()
+            self._shown_changed()
         if follower is not None:
             follower.cancel()
 
@@ -189,23 +208,28 @@ class PlanLines:
             self._followers.clear()
             self._incoming.clear()
             self._cancelled.clear()
+            self._events = False
             self._shown.clear()
-            self._busy = False
+            self._shown_changed()
         for follower in followers:
             follower.cancel()
+
+    def _shown_changed(self) -> None:
+        """Take a changed ``_shown`` into the tick's tuple (caller holds the lock)."""
+        self._on_show = tuple(self._shown.items())
 
     # -- bus callbacks (any thread) -------------------------------------------------------
     def on_plan(self, name: str, plan: Any) -> None:
         """A plan starts on arm ``name``: its line replaces any other at the next tick."""
         if not isinstance(plan, PlannedMotion):
             return
-        line = _Line(plan, plan_goal(plan), plan_end_s(plan))
         with self._lock:
-            if name not in self._followers:
+            follower = self._followers.get(name)
+            if follower is None:
                 return
-            self._incoming[name] = line
+            self._incoming[name] = _Line(plan, follower.controller)
             self._cancelled.discard(name)
-            self._busy = True
+            self._events = True
 
     def on_command(self, name: str, command: Any) -> None:
         """A target reached arm ``name``'s controller: unless it is the plan's goal, the
@@ -217,10 +241,7 @@ class PlanLines:
             self._incoming.pop(name, None)
             if name in self._shown:
                 self._cancelled.add(name)
-            self._update_busy()
-
-    def _update_busy(self) -> None:
-        self._busy = bool(self._incoming or self._cancelled or self._shown)
+            self._events = bool(self._incoming or self._cancelled)
 
     # -- tick (the viewer's thread, under its lock) ---------------------------------------
     def update(self, time_s: float) -> None:
@@ -229,29 +250,30 @@ class PlanLines:
         Raises:
             ViewerError: the server did not take a command.
         """
+        if self._events:
+            self._take_events()
+        for name, line in self._on_show:
+            if line.over(time_s):
+                with self._lock:
+                    if self._shown.get(name) is line:
+                        del self._shown[name]
+                        self._shown_changed()
+                self._delete(name)
+
+    def _take_events(self) -> None:
         with self._lock:
             cancelled, self._cancelled = self._cancelled, set()
             incoming, self._incoming = self._incoming, {}
-            arms = {name: follower.arm for name, follower in self._followers.items()}
+            self._events = False
             # A replaced line goes with the new one's set_object, not with a delete.
             gone = [n for n in cancelled if n not in incoming and n in self._shown]
             for name in gone:
                 del self._shown[name]
+            self._shown_changed()
         for name in gone:
             self._delete(name)
         for name, line in incoming.items():
             self._draw(name, line)
-        with self._lock:
-            shown = list(self._shown.items())
-        for name, line in shown:
-            arm = arms.get(name)
-            if arm is None or self._over(arm, line, time_s):
-                with self._lock:
-                    if self._shown.get(name) is line:
-                        del self._shown[name]
-                self._delete(name)
-        with self._lock:
-            self._update_busy()
 
     def _delete(self, name: str) -> None:
         self._visualizer[f"armfleet/{name}/{NODE}"].delete()
@@ -259,31 +281,22 @@ class PlanLines:
     def _draw(self, name: str, line: _Line) -> None:
         import meshcat.geometry as mg
 
-        node = self._visualizer[f"armfleet/{name}/{NODE}"]
         points = line_points(line.plan.tool_path)
         if points is None:
             logger.warning("viewer: %s's planned motion has no drawable tool path", name)
             with self._lock:
                 had = self._shown.pop(name, None)
+                self._shown_changed()
             if had is not None:
                 self._delete(name)
             return
         material = mg.LineBasicMaterial(color=PLAN_COLOR, linewidth=PLAN_LINE_WIDTH)
+        node = self._visualizer[f"armfleet/{name}/{NODE}"]
         node.set_object(mg.Line(mg.PointsGeometry(points), material))
         with self._lock:
-            self._shown[name] = line
-
-    @staticmethod
-    def _over(arm: Arm, line: _Line, time_s: float) -> bool:
-        """Whether ``line``'s motion is over at ``time_s``."""
-        if time_s >= line.end_s:
-            return True
-        if getattr(arm.position_controller, "stop_reason", None) is not None:
-            return True
-        if arm.is_moving:
-            line.seen_moving = True
-            return False
-        return line.seen_moving
+            if name in self._followers:  # not forgotten meanwhile
+                self._shown[name] = line
+                self._shown_changed()
 
 
 def _is_goal(command: Any, goal: FloatArray | None) -> bool:
