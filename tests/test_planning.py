@@ -1,0 +1,253 @@
+"""Collision-free plans, executed in PyBullet (issue 16's proof).
+
+Every assertion is about what the physics and the bus report, or about numbers computed
+here independently: contacts on ``/collisions``, protective stops, where the arms end,
+PyBullet's distances to the obstacles, the joints' limits from the controller
+parameters, and the plan's own timing sampled densely. The cell is the shipped
+``launch_specs/shared_cell.yaml``: two Pandas 0.9 m apart over a table with a post (a
+cylinder of 4 cm radius up to 0.5 m) and two low walls.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+import armfleet
+from armfleet.messages import FloatArray
+from armfleet.planning import FailureReason, PlanningFailed
+from tests.planning_helpers import (
+    ARRIVAL_RAD,
+    HOLD_DRIFT_RAD,
+    Watch,
+    gap,
+    gap_at,
+    link_gap,
+    shared_cell,
+    swap_goals,
+    tool_down,
+)
+
+#: PyBullet's hulls are up to 2 mm fatter than the planner's (test_planning_scene.py), and
+#: the arm tracks its reference to ~0.1 mrad (~0.1 mm at the tool): the clearance kept in
+#: PyBullet is the planned one minus this [m].
+CLEARANCE_SLACK_M = 3e-3
+#: PyBullet's and the planner's shapes differ by up to this (test_planning_scene.py) [m].
+HULL_TOLERANCE_M = 2.5e-3
+#: Densely sampled timing: this many samples per second of motion.
+TIMING_SAMPLES_PER_S = 20_000
+#: A relative slack on the limits for floating point (the profiles reach them exactly).
+LIMIT_SLACK = 1e-9
+
+
+# -- timing ---------------------------------------------------------------------------------
+def test_a_timed_path_keeps_every_joint_limit_and_its_straight_segments() -> None:
+    """The swap plan (several waypoints), sampled every 50 us: every joint's |v|, |a| and
+    finite-difference jerk within the controller's limits, and every sample on the
+    straight segment between the waypoints it lies between, resting at each waypoint."""
+    with shared_cell() as world:
+        plan = world.plan(swap_goals(world))
+        assert len(plan.waypoints) >= 3, plan  # a multi-segment path, or the test is idle
+        arms = [world.arm(name) for name in plan.arms]
+        velocity = np.concatenate([arm.position_controller.max_velocity for arm in arms])
+        acceleration = np.concatenate(
+            [
+                np.full(7, float(arm.position_controller.parameters["max_acceleration_rad_s2"]))
+                for arm in arms
+            ]
+        )
+        jerk = np.concatenate(
+            [
+                np.full(7, float(arm.position_controller.parameters["max_jerk_rad_s3"]))
+                for arm in arms
+            ]
+        )
+        timing = plan.timing
+        step = 1.0 / TIMING_SAMPLES_PER_S
+        times = np.arange(0.0, timing.duration, step)
+        position, speed, accel = timing.at(times)
+        assert np.all(np.abs(speed) <= velocity * (1 + LIMIT_SLACK))
+        assert np.all(np.abs(accel) <= acceleration * (1 + LIMIT_SLACK))
+        # The jerk is piecewise constant: the difference quotient of the acceleration over
+        # one step is bounded by it exactly (plus rounding of a ~1e-9 difference / 5e-5).
+        finite_jerk = np.abs(np.diff(accel, axis=0)) / step
+        assert np.all(finite_jerk <= jerk * (1 + 1e-6) + 1e-6)
+        # The velocity is the derivative of the position (the profile is what it says).
+        np.testing.assert_allclose(
+            np.diff(position, axis=0) / step, (speed[1:] + speed[:-1]) / 2, atol=1e-3
+        )
+        waypoints, arrivals = plan.waypoints, timing.times
+        for index, (a, b) in enumerate(itertools.pairwise(waypoints)):
+            inside = (times >= arrivals[index]) & (times <= arrivals[index + 1])
+            rows = position[inside]
+            fraction = (rows - a) @ (b - a) / float((b - a) @ (b - a))
+            on_line = a + fraction[:, None] * (b - a)
+            assert np.abs(rows - on_line).max() < 1e-9
+            assert fraction.min() >= -1e-12 and fraction.max() <= 1 + 1e-12
+            end = timing.at(np.array([arrivals[index + 1]]))
+            np.testing.assert_allclose(end[0][0], b, atol=1e-12)
+            assert np.abs(end[1]).max() < 1e-9  # at rest at every waypoint
+        assert timing.duration == pytest.approx(plan.duration_s - plan.start_delay_s)
+
+
+# -- the two-arm swap -----------------------------------------------------------------------
+def test_a_swap_whose_straight_motion_hits_the_post_is_planned_around_it() -> None:
+    """Straight ``move_together`` of the swap touches the post and stops both arms (run
+    first, in its own world); planned jointly it is done with no contact and no stop,
+    both arms start on the same step and stop on the same step, and end at their goals."""
+    with shared_cell() as straight:
+        goals = swap_goals(straight)
+        watch = Watch(straight)
+        straight.move_together(goals)
+        watch.run(2.0)
+        touched = {pair for _, pair, _ in watch.contacts}
+        assert any("post" in pair for pair in touched), touched
+        assert watch.stops >= 1
+    with shared_cell() as world:
+        bob, toby = world.arm("bob"), world.arm("toby")
+        starts = {"bob": bob.positions, "toby": toby.positions}
+        plan = world.plan(goals)
+        watch = Watch(world)
+        nearest = {"bob": math.inf, "toby": math.inf}
+
+        def on_step(w: armfleet.World) -> None:
+            watch(w)
+            for name in nearest:
+                nearest[name] = min(nearest[name], gap(w, name, "post"))
+
+        duration = world.execute(plan)
+        world.run(duration + 0.3, on_step=on_step)
+        assert watch.contacts == [] and watch.stops == 0
+        # PyBullet saw both arms keep the clearance from the post, less the hull slack.
+        assert min(nearest.values()) >= plan.clearance_m - CLEARANCE_SLACK_M, nearest
+        starts_at = {name: watch.first_step_leaving(name, starts[name]) for name in starts}
+        stops_at = {name: watch.last_step_moving(name) for name in starts}
+        assert starts_at["bob"] == starts_at["toby"] == 0, starts_at
+        assert stops_at["bob"] == stops_at["toby"], stops_at
+        assert stops_at["bob"] == pytest.approx(duration / world.dt, abs=2)
+        for name, arm in (("bob", bob), ("toby", toby)):
+            assert np.abs(arm.positions - goals[name]).max() < ARRIVAL_RAD
+
+
+# -- refusals -------------------------------------------------------------------------------
+#: How far inside the 10 mm clearance the refused starts and goals are [m]: 5 mm away from
+#: the obstacle by PyBullet's distance (in the clearance, not touching).
+INSIDE_GAP_M = 5e-3
+BOB_AWAY = (0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # a clear goal: bob's joint 1 turned 0.3 rad
+
+
+def goal_near_the_post(world: armfleet.World) -> FloatArray:
+    """bob's joints with his hand 5 mm from the post (PyBullet's distance), found by
+    bisection along x in a scratch copy of the cell."""
+    with shared_cell() as scratch:
+        bob = scratch.arm("bob")
+        near, far = 0.40, 0.25  # tcp x [m]: into the post / well clear of it
+        goal = bob.positions
+        for _ in range(40):
+            x = (near + far) / 2
+            goal = bob.solve_ik(tool_down((x, 0.0, 0.42)), link="tcp")
+            distance = gap_at(scratch, "bob", goal, "post")
+            if abs(distance - INSIDE_GAP_M) < 2e-4:
+                return goal
+            near, far = (near, x) if distance > INSIDE_GAP_M else (x, far)
+    raise AssertionError(f"no goal {INSIDE_GAP_M} m from the post (last: {distance} m)")
+
+
+def start_near_a_box(world: armfleet.World) -> Callable[[], object]:
+    """A static box put 5 mm under bob's fingertips; then a plan to a clear goal."""
+    tip = min(link_gap(world, "bob", f"bob_panda_{s}finger", "ground") for s in ("left", "right"))
+    hand = world.tf.lookup("world", "bob_tcp")[:3, 3]
+    world.add_object(
+        "block",
+        "box",
+        size=(0.04, 0.04, 0.04),
+        mass=0.0,
+        at=(hand[0], hand[1], tip - INSIDE_GAP_M - 0.02),
+    )
+    assert gap(world, "bob", "block") == pytest.approx(INSIDE_GAP_M, abs=1e-3)
+    bob = world.arm("bob")
+    return lambda: bob.move_to(bob.positions + np.array(BOB_AWAY), avoid_collisions=True)
+
+
+def goal_near_post(world: armfleet.World) -> Callable[[], object]:
+    goal = goal_near_the_post(world)
+    return lambda: world.arm("bob").move_to(goal, avoid_collisions=True)
+
+
+def pose_out_of_reach(world: armfleet.World) -> Callable[[], object]:
+    return lambda: world.arm("bob").move_to_pose(tool_down((2.0, 0.0, 0.5)), avoid_collisions=True)
+
+
+def swap_in_one_millisecond(world: armfleet.World) -> Callable[[], object]:
+    goals = swap_goals(world)
+    return lambda: world.move_together(goals, avoid_collisions=True, timeout_s=0.001)
+
+
+@pytest.mark.parametrize(
+    ("make", "reason", "named"),
+    [
+        pytest.param(
+            start_near_a_box,
+            FailureReason.START_IN_COLLISION,
+            ("bob_panda_", "block"),
+            id="start 5 mm from a box (clearance 10 mm) -> start in collision, both named",
+        ),
+        pytest.param(
+            goal_near_post,
+            FailureReason.GOAL_IN_COLLISION,
+            ("bob_panda_", "post"),
+            id="goal 5 mm from the post -> goal in collision, hand and post named",
+        ),
+        pytest.param(
+            pose_out_of_reach,
+            FailureReason.GOAL_UNREACHABLE,
+            (),
+            id="pose 2 m away -> goal unreachable",
+        ),
+        pytest.param(
+            swap_in_one_millisecond,
+            FailureReason.NO_PATH,
+            (),
+            id="the swap in 1 ms -> no path found, samples given",
+        ),
+    ],
+)
+def test_a_refused_plan_is_one_line_and_nothing_moves(
+    make: Callable[[armfleet.World], Callable[[], object]],
+    reason: FailureReason,
+    named: tuple[str, ...],
+) -> None:
+    with shared_cell() as world:
+        attempt = make(world)
+        world.run(0.2)  # settle whatever the set-up added
+        arms = [world.arm("bob"), world.arm("toby")]
+        sent: list[object] = []
+        for arm in arms:
+            world.bus.subscribe(f"/{arm.name}/position_controller/commands", sent.append)
+            world.bus.subscribe(f"/{arm.name}/planned_motion", sent.append)
+        before = [arm.positions for arm in arms]
+        with pytest.raises(PlanningFailed) as failure:
+            attempt()
+        error = failure.value
+        message = str(error)
+        assert "\n" not in message and error.reason is reason, message
+        assert reason.value in message
+        if named:
+            assert len(error.links) == 2, message
+            for part in named:
+                assert any(part in link for link in error.links), (part, error.links)
+                assert part in message
+            # The distance it states is PyBullet's, within the hulls' difference.
+            stated = float(message.split(" is ")[1].split(" mm from ")[0]) / 1000
+            assert stated == pytest.approx(INSIDE_GAP_M, abs=HULL_TOLERANCE_M), message
+        if reason is FailureReason.NO_PATH:
+            assert "samples tried" in message and error.samples >= 0
+        world.run(0.2)
+        assert sent == []
+        for arm, old in zip(arms, before, strict=True):
+            assert not arm.is_moving
+            assert np.abs(arm.positions - old).max() < HOLD_DRIFT_RAD
