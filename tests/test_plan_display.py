@@ -445,6 +445,37 @@ def test_non_finite_plans_are_recorded_within_the_schema(
     assert written(message)
 
 
+@pytest.mark.parametrize(
+    "stamp",
+    [
+        pytest.param(
+            math.nan,
+            id="a NaN stamp -> that plan is not recorded, one warning, the recording goes on",
+        )
+    ],
+)
+def test_a_plan_with_no_time_is_skipped_by_the_recorder_and_nothing_else_is(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, stamp: float
+) -> None:
+    """A stamp that is not finite cannot be written (a header holds integers): that one
+    message is left out with one warning; the plans around it and every other topic are
+    recorded."""
+    path = tmp_path / "no_time.mcap"
+    with armfleet.World() as world:
+        bob = world.spawn("bob", at=(0, 0))
+        with armfleet.record(world, path), caplog.at_level(logging.WARNING, logger="armfleet"):
+            plan = straight_plan(world, bob, nudge(bob, 0.2))
+            world.bus.publish("/bob/planned_motion", plan)
+            world.bus.publish("/bob/planned_motion", dataclasses.replace(plan, stamp=stamp))
+            world.bus.publish("/bob/planned_motion", plan)
+            world.run(0.01)
+    assert "cannot encode a message of /bob/planned_motion" in caplog.text
+    _, messages = plans_recorded(path)
+    assert len(messages["/bob/planned_motion"]) == 2
+    states = open_recording(path).topics["/bob/joint_states"]
+    assert states.message_count >= 10, "the recording went on"
+
+
 # -- replay ------------------------------------------------------------------------------
 def test_the_replay_stream_has_the_plan_at_its_time(
     recorded_plan: tuple[Path, PlannedMotion, float],
