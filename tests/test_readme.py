@@ -36,6 +36,7 @@ PAGES = (
     "performance.md",
     "descriptions-and-specs.md",
     "design.md",
+    "planning.md",
 )
 #: Pages whose ``python`` blocks need more than this file gives them, and who runs them.
 RUN_ELSEWHERE = {
