@@ -1,0 +1,234 @@
+"""The planning benchmark's figures per class of problems, issue 16's targets, and the table.
+
+Everything here works on the per-problem records that benchmarks/planning.py writes
+to its JSON, so a saved run can be summarised again.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+#: Phases of a request, in the order they run (``Plan.seconds``).
+PHASES = ("scene", "ik", "check", "search", "simplify", "certify", "timing", "in_time")
+#: Phases made of collision checks (and the search's sampling).
+CHECKING = ("check", "search", "simplify", "certify")
+#: Issue 16's targets for the whole request [ms], per class; success within 1 s.
+MEDIAN_TARGET_MS = {"1 arm": 10.0, "2 arms": 20.0}
+P95_TARGET_MS = 100.0
+SUCCESS_TARGET = 0.99
+STRAIGHT_COLLISION_TARGET = 0.5
+
+Record = dict[str, Any]
+
+
+def _stat(values: Sequence[float], q: float) -> float | None:
+    return round(float(np.percentile(values, q)), 3) if values else None
+
+
+def _rate(part: int, whole: int) -> float | None:
+    return round(part / whole, 4) if whole else None
+
+
+def class_row(records: Sequence[Record]) -> dict[str, Any]:
+    """The figures of one class of problems."""
+    attempted = [r for r in records if r["attempted"]]
+    solved = [r for r in attempted if r["solved"]]
+    times = [r["request_ms"] for r in solved]
+    total_ms = sum(times)
+    phase_sums = {k: sum(r["phases_ms"].get(k, 0.0) for r in solved) for k in PHASES}
+    pose = [r for r in attempted if r["goal"] == "pose"]
+    straight = [r for r in records if not r["straight"]["refused"]]
+    failures = collections.Counter(
+        r["reason"] or "could not reach the start" for r in records if not r["solved"]
+    )
+    tracking = [r["tracking_error_rad"] * 1e3 for r in solved]
+    return {
+        "problems": len(records),
+        "attempted": len(attempted),
+        "solved": len(solved),
+        "success_rate": _rate(len(solved), len(attempted)),
+        "solved_within_1s": sum(r["request_ms"] <= 1000.0 for r in solved),
+        "pose_goal_problems": len(pose),
+        "pose_goal_solved": sum(r["solved"] for r in pose),
+        "failures": dict(failures),
+        "request_ms": {
+            "median": _stat(times, 50),
+            "p95": _stat(times, 95),
+            "max": round(max(times), 3) if times else None,
+        },
+        "planner_ms_median": _stat([r["planner_ms"] for r in solved], 50),
+        "phase_ms_median": {
+            k: _stat([r["phases_ms"].get(k, 0.0) for r in solved], 50) for k in PHASES
+        },
+        "time_share": {k: _rate_f(v, total_ms) for k, v in phase_sums.items()}
+        | {"other": _rate_f(total_ms - sum(phase_sums.values()), total_ms)},
+        "checks_median": _stat([r["checks"] for r in solved], 50),
+        # Upper bound of one check's cost: the phases that check states, over the checks.
+        "us_per_check_median": _stat(
+            [
+                sum(r["phases_ms"].get(k, 0.0) for k in CHECKING) * 1e3 / r["checks"]
+                for r in solved
+                if r["checks"]
+            ],
+            50,
+        ),
+        "scene_build_ms_median": _stat([r["scene_build_ms"] for r in attempted], 50),
+        "samples_median": _stat([r["samples"] for r in solved], 50),
+        "straight_line_proven_clear": sum(r["straight_clear"] for r in solved),
+        "length_ratio": {
+            "median": _stat([r["length_ratio"] for r in solved], 50),
+            "p95": _stat([r["length_ratio"] for r in solved], 95),
+            "max": max((r["length_ratio"] for r in solved), default=None),
+        },
+        "recheck_touching_paths": sum(bool(r["recheck_touches"]) for r in solved),
+        "execution": {
+            "motions": len(solved),
+            "motions_with_contacts": sum(r["contact_steps"] > 0 for r in solved),
+            "contact_steps": sum(r["contact_steps"] for r in solved),
+            "protective_stops": sum(r["stops"] for r in solved),
+            "deepest_mm": max((r["deepest_mm"] for r in solved), default=0.0),
+            "tracking_error_mrad_median": _stat(tracking, 50),
+            "tracking_error_mrad_max": round(max(tracking), 4) if tracking else None,
+            "pose_error_mm_max": max(
+                (r["pose_error_mm"] for r in solved if r["pose_error_mm"] is not None),
+                default=None,
+            ),
+            "pose_error_deg_max": max(
+                (r["pose_error_deg"] for r in solved if r["pose_error_deg"] is not None),
+                default=None,
+            ),
+        },
+        "straight": {
+            "motions": len(straight),
+            "refused": len(records) - len(straight),
+            "collided": sum(r["straight_collided"] for r in straight),
+            "collision_rate": _rate(sum(r["straight_collided"] for r in straight), len(straight)),
+            "protective_stops": sum(r["straight"]["stops"] for r in straight),
+        },
+    }
+
+
+def _rate_f(part: float, whole: float) -> float | None:
+    return round(part / whole, 4) if whole > 0 else None
+
+
+def summarise(records: Sequence[Record]) -> dict[str, dict[str, Any]]:
+    """Per class (``"1 arm"``, ``"2 arms"``) and for ``"all"``."""
+    kinds = sorted({r["kind"] for r in records})
+    rows = {kind: class_row([r for r in records if r["kind"] == kind]) for kind in kinds}
+    rows["all"] = class_row(records)
+    return rows
+
+
+def targets(classes: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
+    """Issue 16's targets, each with the measured value and whether it is met."""
+    out: list[dict[str, Any]] = []
+
+    def add(what: str, value: Any, met: bool) -> None:
+        out.append({"target": what, "value": value, "met": bool(met)})
+
+    for kind, row in classes.items():
+        if kind == "all":
+            continue
+        attempted = row["attempted"]
+        within = row["solved_within_1s"] / attempted if attempted else 0.0
+        success = f"{kind}: success within 1 s >= {SUCCESS_TARGET:.0%}"
+        add(success, round(within, 4), within >= SUCCESS_TARGET)
+        median, p95 = row["request_ms"]["median"], row["request_ms"]["p95"]
+        goal = MEDIAN_TARGET_MS.get(kind, MEDIAN_TARGET_MS["2 arms"])
+        add(f"{kind}: median <= {goal:g} ms", median, median is not None and median <= goal)
+        add(f"{kind}: p95 <= {P95_TARGET_MS:g} ms", p95, p95 is not None and p95 <= P95_TARGET_MS)
+    execution = classes["all"]["execution"]
+    clean = execution["contact_steps"] == 0 and execution["protective_stops"] == 0
+    add("0 contacts (and 0 stops) during execution", execution["contact_steps"], clean)
+    touching = classes["all"]["recheck_touching_paths"]
+    add("returned paths touching at the independent re-check: 0", touching, touching == 0)
+    rate = classes["all"]["straight"]["collision_rate"]
+    enough = rate is not None and rate >= STRAIGHT_COLLISION_TARGET
+    add(f"straight move_together collides on >= {STRAIGHT_COLLISION_TARGET:.0%}", rate, enough)
+    return out
+
+
+def _ms(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f}"
+
+
+def _table_rows(phases: Sequence[str]) -> list[tuple[str, Callable[[dict[str, Any]], str]]]:
+    """Label and cell of each line of the table."""
+
+    def request(r: dict[str, Any]) -> str:
+        return " / ".join(_ms(r["request_ms"][k]) for k in ("median", "p95", "max"))
+
+    def phase(name: str) -> Callable[[dict[str, Any]], str]:
+        return lambda r: f"{_ms(r['phase_ms_median'][name])} ({r['time_share'][name] or 0:.0%})"
+
+    def execution(r: dict[str, Any]) -> str:
+        e = r["execution"]
+        return f"{e['motions_with_contacts']} ({e['contact_steps']}) / {e['protective_stops']}"
+
+    def tracking(r: dict[str, Any]) -> str:
+        e = r["execution"]
+        return f"{e['tracking_error_mrad_median']} / {e['tracking_error_mrad_max']}"
+
+    def pose_error(r: dict[str, Any]) -> str:
+        e = r["execution"]
+        return f"{_round(e['pose_error_mm_max'])} / {_round(e['pose_error_deg_max'])}"
+
+    def straight(r: dict[str, Any]) -> str:
+        s = r["straight"]
+        if not s["motions"]:
+            return "-"
+        return f"{s['collided']}/{s['motions']} ({s['collision_rate']:.0%})"
+
+    rows: list[tuple[str, Callable[[dict[str, Any]], str]]] = [
+        ("solved / attempted (problems)",
+         lambda r: f"{r['solved']}/{r['attempted']} ({r['problems']})"),
+        ("  pose goals solved", lambda r: f"{r['pose_goal_solved']}/{r['pose_goal_problems']}"),
+        ("  failures", lambda r: ", ".join(f"{k}: {v}" for k, v in r["failures"].items()) or "-"),
+        ("request ms median / p95 / max", request),
+    ]  # fmt: skip
+    rows += [(f"  {name} ms median (share)", phase(name)) for name in phases]
+    rows += [
+        ("  other (share)", lambda r: f"{r['time_share']['other'] or 0:.0%}"),
+        ("collision checks median", lambda r: str(r["checks_median"])),
+        ("  us per check median (upper bound)", lambda r: str(r["us_per_check_median"])),
+        ("scene build after respawn ms median", lambda r: str(r["scene_build_ms_median"])),
+        ("straight line proven clear", lambda r: str(r["straight_line_proven_clear"])),
+        ("length / straight line med / p95",
+         lambda r: f"{r['length_ratio']['median']} / {r['length_ratio']['p95']}"),
+        ("independent re-check: touching", lambda r: str(r["recheck_touching_paths"])),
+        ("execution: contacts (steps) / stops", execution),
+        ("tracking error mrad med / max", tracking),
+        ("pose error max mm / deg", pose_error),
+        ("STRAIGHT move_together: collided", straight),
+        ("  straight: stops / refused",
+         lambda r: f"{r['straight']['protective_stops']} / {r['straight']['refused']}"),
+    ]  # fmt: skip
+    return rows
+
+
+def _round(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3g}"
+
+
+def print_report(figures: dict[str, Any]) -> None:
+    """The table (one column per class), then the targets with met / MISS."""
+    settings, classes = figures["settings"], figures["classes"]
+    print(
+        f"\nshared cell, {settings['problems']} problems (seed {settings['seed']}, every "
+        f"{settings['pose_goals_every']}rd with pose goals), timeout {settings['timeout_s']} s, "
+        f"clearance {settings['clearance_m'] * 1e3:g} mm"
+    )
+    lines: list[tuple[str, ...]] = [("", *classes)]
+    for label, cell in _table_rows(PHASES):
+        lines.append((label, *(cell(row) for row in classes.values())))
+    widths = [max(len(line[i]) for line in lines) for i in range(len(lines[0]))]
+    for line in lines:
+        print("  ".join(text.ljust(width) for text, width in zip(line, widths, strict=True)))
+    print("\ntargets:")
+    for target in figures["targets"]:
+        print(f"  {'met ' if target['met'] else 'MISS'}  {target['target']}: {target['value']}")
