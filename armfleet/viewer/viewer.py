@@ -8,7 +8,8 @@ update is sent without waiting for anything (:mod:`armfleet.viewer.live_link`),
 so neither the server nor a browser can slow the simulation down; once the
 simulation pauses, a background thread sends the poses it came to rest in. A
 viewer that fails (its server died or hangs) stops itself; the simulation goes
-on and :attr:`Viewer.error` says why.
+on and :attr:`Viewer.error` says why. While an arm runs a planned motion, its tool
+path is drawn under the arm's node (:mod:`armfleet.viewer.plan_lines`).
 
 Only the standard library and numpy are imported with this module: MeshCat,
 Pinocchio's visualizer, ZMQ and tornado load when a viewer starts.
