@@ -9,7 +9,7 @@ Panda at the origin, a static post 0.5 m in front of him and a static box away f
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -114,18 +114,24 @@ def test_a_pose_goal_is_planned_around_the_post(cell: Cell) -> None:
 
 
 def test_a_plan_longer_than_the_client_timeout_is_waited_for(cell: Cell) -> None:
-    """A client whose timeout (0.1 s) is shorter than the plan (a search around the post,
-    scene included) still gets its answer: the wait is its timeout plus the plan's budget,
-    while the world's queue wait stays a share of its timeout alone."""
+    """A client whose timeout (0.05 s) is shorter than the plan still gets its answer: it
+    waits its timeout plus the plan's budget, while the world's queue wait stays a share
+    of its timeout alone. The plan builds the collision model of an arm spawned just
+    before (carl, 1.5 m behind bob), which took 0.15-0.4 s here; a reply wait of the
+    client's timeout alone gave up after 0.05 s while the world went on and moved bob."""
     client = cell.client
     at_start(client)
-    with Client(cell.world.address, timeout=0.1) as hurried:
-        bob = hurried.arm("bob")
-        duration = bob.move_to(tool_low(-0.9), avoid_collisions=True, timeout_s=5.0)
-    assert duration > 0.0
-    bob = client.arm("bob")
-    bob.wait(WAIT_S)
-    assert np.abs(bob.positions - tool_low(-0.9)).max() < HOLD_TOLERANCE_RAD
+    client.spawn("carl", at=(-1.5, 0.0))
+    try:
+        with Client(cell.world.address, timeout=0.05) as hurried:
+            bob = hurried.arm("bob")
+            duration = bob.move_to(tool_low(-0.9), avoid_collisions=True, timeout_s=5.0)
+        assert duration > 0.0
+        bob = client.arm("bob")
+        bob.wait(WAIT_S)
+        assert np.abs(bob.positions - tool_low(-0.9)).max() < HOLD_TOLERANCE_RAD
+    finally:
+        client.remove("carl")
 
 
 @pytest.mark.parametrize(
@@ -163,11 +169,12 @@ def test_the_client_refuses_bad_planning_options_as_the_local_api_does(
     bob = cell.client.arm("bob")
     before = bob.positions
     far = before + 0.3
-    for move in (
+    moves: list[Callable[[], float]] = [
         lambda: bob.move_to(far, **keywords),  # type: ignore[arg-type]
         lambda: bob.move_to_pose((0.4, 0.0, 0.5), **keywords),  # type: ignore[arg-type]
         lambda: cell.client.move_together({"bob": far}, **keywords),  # type: ignore[arg-type]
-    ):
+    ]
+    for move in moves:
         with pytest.raises(error) as caught:
             move()
         assert says in str(caught.value)
