@@ -84,3 +84,43 @@ def test_planner_choice_without_roboplan_says_how_to_get_it(tmp_path: Path) -> N
     assert result.stderr.strip().splitlines() == [
         "planner_choice needs roboplan: pip install -e .[bench]"
     ]
+
+
+def test_planning_benchmark_short_mode_executes_clean_plans_and_collides_straight(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "planning.json"
+    runtime = tmp_path / "runtime"
+    runtime.mkdir()
+    result = subprocess.run(
+        [sys.executable, str(BENCHMARKS / "planning.py"), "--short", "--json", str(out)],
+        capture_output=True, text=True, timeout=600,
+        env=os.environ | {"XDG_RUNTIME_DIR": str(runtime)},
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""  # the straight motions' protective stops are counted, not logged
+    figures = json.loads(out.read_text())
+    assert set(figures["classes"]) == {"1 arm", "2 arms", "all"}
+    records = figures["problems"]
+    assert [r["kind"] for r in records] == ["1 arm", "2 arms", "1 arm", "2 arms"]
+    assert [r["goal"] for r in records] == ["joint", "joint", "pose", "joint"]
+    solved = [r for r in records if r["solved"]]
+    assert solved, [r["error"] for r in records]
+    for r in solved:
+        # PyBullet, not the planner, says what touched: nothing, and nothing stopped.
+        assert (r["contact_steps"], r["pairs"], r["stops"]) == (0, [], 0), r["index"]
+        assert r["recheck_touches"] is False  # the independent model agrees
+        assert "certify" in r["phases_ms"]  # the planner proved the path before returning it
+        assert r["length_ratio"] >= 1 - 1e-9  # no path is shorter than its straight line
+        assert r["tracking_error_rad"] < 2e-3  # the stack tracks to ~3e-5 rad (field notes)
+        if r["goal"] == "pose":  # 2e-3 rad on a ~1 m arm: 2 mm at most
+            assert r["pose_error_mm"] < 2.0 and r["pose_error_deg"] < 0.5
+    for r in records:
+        straight = r["straight"]
+        if straight["stops"]:
+            assert straight["contact_steps"] > 0  # a protective stop follows a contact
+        if r["solved"] and r["goal"] == "joint" and r["straight_clear"]:
+            # the planner proved the straight joint line clear: in PyBullet it is
+            assert not r["straight_collided"], r["index"]
+    assert figures["classes"]["all"]["straight"]["collided"] >= 1  # goals across the table
+    assert "targets:" in result.stdout and "STRAIGHT move_together" in result.stdout
