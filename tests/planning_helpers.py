@@ -126,12 +126,24 @@ def settle(world: armfleet.World, arms: list[armfleet.Arm], limit_s: float = 15.
     world.run(0.1)
 
 
-def gap(world: armfleet.World, body_a: str, body_b: str, window_m: float = 0.2) -> float:
+def body_ids(world: armfleet.World) -> dict[str, int]:
+    """PyBullet body ids by name: arms, objects and ``"ground"``."""
+    return {n.name: n.body_id for n in world.contacts.neighbours()}
+
+
+def gap(
+    world: armfleet.World,
+    body_a: str,
+    body_b: str,
+    window_m: float = 0.2,
+    ids: dict[str, int] | None = None,
+) -> float:
     """PyBullet's smallest distance between two bodies (arms or objects) [m], or
-    ``window_m`` if they are further apart."""
-    client = world.physics_client
-    ids = {n.name: n.body_id for n in world.contacts.neighbours()}
-    points = p.getClosestPoints(ids[body_a], ids[body_b], window_m, physicsClientId=client)
+    ``window_m`` if they are further apart (``ids``: :func:`body_ids`, to save asking)."""
+    ids = ids or body_ids(world)
+    points = p.getClosestPoints(
+        ids[body_a], ids[body_b], window_m, physicsClientId=world.physics_client
+    )
     return float(min((point[8] for point in points), default=window_m))
 
 
