@@ -158,20 +158,25 @@ def link_gap(world: armfleet.World, arm: str, link: str, body: str, window_m: fl
     return float(min((point[8] for point in points), default=window_m))
 
 
-def gap_at(world: armfleet.World, arm: str, positions: FloatArray, body: str) -> float:
-    """PyBullet's distance [m] between ``arm`` at joint ``positions`` and ``body``, in
-    ``world`` (a scratch world: the arm is put there without a step, then put back)."""
+def gap_at(
+    world: armfleet.World, positions: dict[str, FloatArray], body_a: str, body_b: str
+) -> float:
+    """PyBullet's distance [m] between ``body_a`` and ``body_b`` with the arms put at
+    ``positions`` (per arm, its joints), in ``world``: a scratch world, the arms are put
+    there without a step, then put back."""
     client = world.physics_client
-    own = world.arm(arm).body
-    index = {
-        p.getJointInfo(own.body_id, j, physicsClientId=client)[1].decode(): j
-        for j in range(p.getNumJoints(own.body_id, physicsClientId=client))
-    }
-    joints = [index[name] for name in world.arm(arm).joint_names]
-    saved = [p.getJointState(own.body_id, j, physicsClientId=client)[0] for j in joints]
-    for joint, value in zip(joints, positions, strict=True):
-        p.resetJointState(own.body_id, joint, float(value), physicsClientId=client)
-    distance = gap(world, arm, body, 1.0)
-    for joint, value in zip(joints, saved, strict=True):
-        p.resetJointState(own.body_id, joint, value, physicsClientId=client)
+    saved: list[tuple[int, int, float]] = []
+    for arm, values in positions.items():
+        body = world.arm(arm).body.body_id
+        index = {
+            p.getJointInfo(body, j, physicsClientId=client)[1].decode(): j
+            for j in range(p.getNumJoints(body, physicsClientId=client))
+        }
+        for name, value in zip(world.arm(arm).joint_names, values, strict=True):
+            joint = index[name]
+            saved.append((body, joint, p.getJointState(body, joint, physicsClientId=client)[0]))
+            p.resetJointState(body, joint, float(value), physicsClientId=client)
+    distance = gap(world, body_a, body_b, 1.0)
+    for body, joint, value in saved:
+        p.resetJointState(body, joint, value, physicsClientId=client)
     return distance

@@ -154,7 +154,7 @@ def goal_near_the_post(world: armfleet.World) -> FloatArray:
         for _ in range(40):
             x = (near + far) / 2
             goal = bob.solve_ik(tool_down((x, 0.0, 0.42)), link="tcp")
-            distance = gap_at(scratch, "bob", goal, "post")
+            distance = gap_at(scratch, {"bob": goal}, "bob", "post")
             if abs(distance - INSIDE_GAP_M) < 2e-4:
                 return goal
             near, far = (near, x) if distance > INSIDE_GAP_M else (x, far)
