@@ -49,7 +49,11 @@ BATCH = 6
 #: A bad command still running after this long hangs [s] (a generous bound, not a timing).
 HANG_S = 120
 
+#: Bob's tool 3 cm into the floor, joint limits kept: a goal in collision.
+IN_THE_FLOOR = ["0", "1.7", "0", "-0.8", "0", "3.5", "0.785"]
 WAIT_RANGE = "give seconds in [0, 600]"
+CLEARANCE_RANGE = "give metres in [0.001, 0.5]"
+PLANNING_RANGE = "give seconds in [0.001, 60]"
 TIMEOUT_RANGE = "give seconds in [0.001, 600]"
 STEP_RANGE = "give steps, an integer in 1..100000"
 #: A folder that exists wherever the tests run.
@@ -304,6 +308,53 @@ BAD = [
         [f"address '{'b' * 95}...(100002 characters) is malformed"],
         id="--connect 100 kB -> one short line (the value was echoed whole)",
     ),
+    # -- collision-free moves (issue 16): the planner's ranges, checked while parsing ------
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--avoid-collisions", "--clearance", "0"],
+        ["argument --clearance: '0' is invalid", CLEARANCE_RANGE],
+        id="move --avoid-collisions --clearance 0 -> refused before anything is sent",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--avoid-collisions", "--clearance", "nan"],
+        ["argument --clearance: 'nan' is invalid", CLEARANCE_RANGE],
+        id="move --avoid-collisions --clearance nan -> refused before anything is sent",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--avoid-collisions", "--planning-timeout", "-1"],
+        ["argument --planning-timeout: '-1' is invalid", PLANNING_RANGE],
+        id="move --avoid-collisions --planning-timeout -1 -> refused before anything is sent",
+    ),
+    pytest.param(
+        [
+            "move-together",
+            f"bob={','.join(AWAY)}",
+            "--avoid-collisions",
+            "--planning-timeout",
+            "1e308",
+        ],
+        ["argument --planning-timeout: '1e308' is invalid", PLANNING_RANGE],
+        id="move-together --avoid-collisions --planning-timeout 1e308 -> refused",
+    ),
+    pytest.param(
+        ["move", "bob", "--pose", "0.4", "0", "0.5", "--linear", "--avoid-collisions"],
+        ["argument --avoid-collisions: not allowed with argument --linear"],
+        id="move --pose --linear --avoid-collisions -> one or the other, nothing sent",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--clearance", "0.02"],
+        ["--clearance goes with --avoid-collisions"],
+        id="move --clearance without --avoid-collisions -> refused (not a straight move)",
+    ),
+    pytest.param(
+        ["move-together", f"bob={','.join(AWAY)}", "--planning-timeout", "2"],
+        ["--planning-timeout goes with --avoid-collisions"],
+        id="move-together --planning-timeout without --avoid-collisions -> refused",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *IN_THE_FLOOR, "--avoid-collisions", "--wait"],
+        ["cannot plan bob: goal in collision: bob_panda_", " touches ground (clearance 10 mm)"],
+        id="move --avoid-collisions to a goal in the floor -> the world's one line, no motion",
+    ),
 ]
 
 
@@ -431,6 +482,8 @@ USER_PORT = "a TCP port, an integer in 1..65535"
 API_PORT = "a TCP port (0: a free one), an integer in 0..65535"
 
 METRES = "metres in [-1000, 1000]"
+CLEARANCE_METRES = "metres in [0.001, 0.5]"
+SECONDS_PLAN = "seconds in [0.001, 60]"
 DEGREES = "degrees in [-360, 360]"
 
 HELP_RANGES = {
@@ -441,8 +494,10 @@ HELP_RANGES = {
     "launch": {"--duration S": SECONDS_RUN, "--viewer-port PORT": USER_PORT,
                "--api-port PORT": API_PORT},
     "move": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER,
-             "--pose V [V ...]": f"X Y Z {METRES}, angles {DEGREES}"},
-    "move-together": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
+             "--pose V [V ...]": f"X Y Z {METRES}, angles {DEGREES}",
+             "--clearance M": CLEARANCE_METRES, "--planning-timeout S": SECONDS_PLAN},
+    "move-together": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER,
+                      "--clearance M": CLEARANCE_METRES, "--planning-timeout S": SECONDS_PLAN},
     "grip": {"--wait-timeout S": SECONDS_WAIT, "--timeout S": SECONDS_ANSWER},
     "step": {"N": "steps, an integer in 1..100000", "--timeout S": SECONDS_ANSWER},
     "arms": {"--timeout S": SECONDS_ANSWER},
@@ -494,7 +549,11 @@ def test_the_world_refuses_what_the_command_line_refuses(world: WorldProcess) ->
             ("wait", {"name": "bob", "timeout_s": 1e308}, WAIT_RANGE),
             ("step", {"count": 10**12}, STEP_RANGE),
             ("step", {"count": 2.5}, STEP_RANGE),
-        ):
+            ("move", {"name": "bob", "positions": PANDA_HOME, "avoid_collisions": True,
+                      "clearance_m": 0.0}, CLEARANCE_RANGE),
+            ("move_together", {"targets": {"bob": PANDA_HOME}, "avoid_collisions": True,
+                               "timeout_s": -1.0}, PLANNING_RANGE),
+        ):  # fmt: skip
             with pytest.raises(armfleet.ArmfleetError, match=re.escape(expected)):
                 client.call(op, args)
         bob = client.arm("bob")

@@ -3,7 +3,8 @@ exactly one error reply naming the problem, and the world, its arm and the other
 clients are untouched.
 
 The catalogue here covers the request envelope (ids, timeouts), streams and
-subscriptions, waits, and a client over its own in-flight limit.
+subscriptions, waits, the options of collision-free moves, and a client over its own
+in-flight limit.
 """
 
 from __future__ import annotations
@@ -77,6 +78,17 @@ def exchange(socket: zmq.Socket[bytes], requests: list[Any]) -> list[dict[str, A
         if reply.get("kind") == "reply":  # the raw stream's topic frames come here too
             replies.append(reply)
     return replies
+
+
+#: Bob's home with joint 1 turned 0.5 rad: a move that got through ends far from home.
+AWAY = [0.5, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+#: Bob's tool 3 cm into the floor, joint limits kept: a goal in collision.
+IN_THE_FLOOR = [0.0, 1.7, 0.0, -0.8, 0.0, 3.5, 0.785]
+
+
+def planned(**args: Any) -> dict[str, Any]:
+    """The args of a collision-free move of bob to :data:`AWAY`, with ``args`` over them."""
+    return {"name": "bob", "positions": AWAY, "avoid_collisions": True} | args
 
 
 def req(op: str, args: Any = None, request_id: Any = 1, **extra: Any) -> dict[str, Any]:
@@ -204,6 +216,75 @@ CASES = [
         "ProtocolError",
         "'timeout_s'",
         id="wait with a NaN timeout -> ProtocolError naming 'timeout_s'",
+    ),
+    # -- collision-free moves (issue 16): the flag and the planner's ranges ----------------
+    pytest.param(
+        lambda t: [req("move", {"name": "bob", "positions": AWAY, "avoid_collisions": "yes"})],
+        "ProtocolError",
+        "move: 'avoid_collisions' must be true or false, got a string",
+        id="move with avoid_collisions 'yes' -> ProtocolError (not read as yes)",
+    ),
+    pytest.param(
+        lambda t: [req("move_together", {"targets": {"bob": AWAY}, "avoid_collisions": 1})],
+        "ProtocolError",
+        "move_together: 'avoid_collisions' must be true or false",
+        id="move_together with avoid_collisions 1 -> ProtocolError",
+    ),
+    pytest.param(
+        lambda t: [req("move", planned(clearance_m=0))],
+        "ProtocolError",
+        "move: 'clearance_m' is 0; give metres in [0.001, 0.5]",
+        id="planned move with clearance 0 -> ProtocolError with the range",
+    ),
+    pytest.param(
+        lambda t: [req("move", planned(clearance_m=NAN))],
+        "ProtocolError",
+        "move: 'clearance_m' is nan; give metres in [0.001, 0.5]",
+        id="planned move with a NaN clearance -> ProtocolError with the range",
+    ),
+    pytest.param(
+        lambda t: [
+            req(
+                "move_pose",
+                {
+                    "name": "bob",
+                    "position": [0.4, 0.0, 0.5],
+                    "avoid_collisions": True,
+                    "timeout_s": -1,
+                },
+            )
+        ],
+        "ProtocolError",
+        "move_pose: 'timeout_s' is -1; give seconds in [0.001, 60]",
+        id="planned move_pose with a negative budget -> ProtocolError with the range",
+    ),
+    pytest.param(
+        lambda t: [req("move", {"name": "bob", "positions": AWAY, "clearance_m": 0.05})],
+        "ProtocolError",
+        "move: 'clearance_m' goes with 'avoid_collisions': true",
+        id="clearance without avoid_collisions -> ProtocolError (not a straight move)",
+    ),
+    pytest.param(
+        lambda t: [
+            req(
+                "move_pose",
+                {
+                    "name": "bob",
+                    "position": [0.4, 0.0, 0.5],
+                    "linear": True,
+                    "avoid_collisions": True,
+                },
+            )
+        ],
+        "ArmfleetError",
+        "bob: choose linear=True (a straight tool line) or avoid_collisions=True",
+        id="move_pose linear and avoid_collisions -> the arm's one line, nothing moves",
+    ),
+    pytest.param(
+        lambda t: [req("move", planned(positions=IN_THE_FLOOR))],
+        "PlanningFailed",
+        "cannot plan bob: goal in collision: bob_panda_",
+        id="planned move to a goal in the floor -> PlanningFailed naming the pair, no motion",
     ),
     pytest.param(
         lambda t: [req("info", request_id=i) for i in range(1, 3 * MAX_IN_FLIGHT_PER_CLIENT)],
