@@ -5,7 +5,11 @@
     python examples/handover.py --runs 20        # 20 seeded runs, bar moved a little each time
 
 The scene is launch_specs/handover.yaml. Grasps are planned from the bar's pose
-on /tf (where it really is), so the bar may start anywhere near its spot.
+on /tf (where it really is), so the bar may start anywhere near its spot. The
+transfers (to the bar, to the handover point, to the mat, home) are planned around
+the tables, the other arm and the bar (``avoid_collisions``); only the last few
+centimetres to and from a grasp are straight moves, since a plan keeps 1 cm from
+everything and cannot end with the fingers round the bar.
 """
 
 from __future__ import annotations
@@ -73,8 +77,12 @@ def hand_over(world: armfleet.World, *, realtime: bool = False) -> Watch:
     def wait(seconds: float) -> None:
         world.run(seconds, realtime=realtime, on_step=watch)
 
-    def go(arm: armfleet.Arm, pose: np.ndarray, linear: bool = False) -> None:
-        wait(arm.move_to_pose(pose, link="tcp", linear=linear) + 0.2)
+    def go(arm: armfleet.Arm, pose: np.ndarray) -> None:
+        """A planned move around everything in the world (the other arm included)."""
+        wait(arm.move_to_pose(pose, link="tcp", avoid_collisions=True) + 0.2)
+
+    def straight(arm: armfleet.Arm, pose: np.ndarray) -> None:
+        wait(arm.move_to_pose(pose, link="tcp", linear=True) + 0.2)
 
     def bar() -> np.ndarray:
         return world.tf.lookup("world", "bar")
@@ -85,36 +93,35 @@ def hand_over(world: armfleet.World, *, realtime: bool = False) -> Watch:
     # Bob picks the bar up by its -x end.
     pick = grasp(bar(), -1)
     go(bob, lifted(pick))
-    go(bob, pick, linear=True)
+    straight(bob, pick)
     bob.gripper.close()
     wait(0.5)
     watch.picked = bob.gripper.holding
-    go(bob, lifted(pick), linear=True)
+    straight(bob, lifted(pick))
     # ...holds it out to toby (the bar along x, between them)...
     bob_in_bar = np.linalg.solve(bar(), world.tf.lookup("world", "bob_tcp"))
     go(bob, frame(HANDOVER_AT_M) @ bob_in_bar)
     # ...toby takes it by the +x end, and bob lets go and steps back.
     take = grasp(bar(), +1)
     go(toby, lifted(take))
-    go(toby, take, linear=True)
+    straight(toby, take)
     toby.gripper.close()
     wait(0.5)
     bob.gripper.open()
     wait(0.5)
-    go(bob, lifted(world.tf.lookup("world", "bob_tcp")), linear=True)
-    bob.move_to(bob.description.home)
+    straight(bob, lifted(world.tf.lookup("world", "bob_tcp")))
+    bob.move_to(bob.description.home, avoid_collisions=True)  # toby plans round it
     # Toby puts the bar on the mat and steps back.
     toby_in_bar = np.linalg.solve(bar(), world.tf.lookup("world", "toby_tcp"))
     mat = world.tf.lookup("world", "mat")
     place = lifted(mat, MAT_TO_BAR_CENTRE_M + 0.002) @ toby_in_bar
     go(toby, lifted(place))
-    go(toby, place, linear=True)
+    straight(toby, place)
     watch.placed = True
     toby.gripper.open()
     wait(0.5)
-    go(toby, lifted(place), linear=True)
-    toby.move_to(toby.description.home)
-    wait(2.0)
+    straight(toby, lifted(place))
+    wait(toby.move_to(toby.description.home, avoid_collisions=True) + 0.5)
     return watch
 
 

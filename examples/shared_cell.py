@@ -6,8 +6,8 @@
 
 The scene is launch_specs/shared_cell.yaml: bob at (0, 0) and toby at (0.9, 0) facing
 each other over a table split by a post and two low walls. Bob's cubes start on his
-half (x < 0.45 m) and end on toby's; toby's go the other way. The spec's four cubes
-are re-placed and the rest added with ``world.add_object``.
+half (x < 0.45 m) and end on toby's; toby's go the other way. The cubes are put
+down with ``world.add_object`` (the spec's own four make way for them).
 
 Every motion between table positions is planned (``avoid_collisions``). Picks and
 places run in parallel: an arm plans while the other moves, and the planner checks the
@@ -25,8 +25,9 @@ import argparse
 import math
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import NoReturn
 
 import numpy as np
 
@@ -253,35 +254,27 @@ def swap_spots(count: int, rng: np.random.Generator) -> list[tuple[int, int]]:
 
 
 def set_out_cubes(world: armfleet.World, count: int, rng: np.random.Generator) -> list[Cube]:
-    """Put ``count`` cubes on the table, bob's on his half and toby's on his, each with the
-    spot where it must end. The spec's cubes are re-used (the ones not needed are taken
-    away); the others are added."""
-    spare = sorted(name for name in world.objects if name.startswith("cube_"))
+    """Put ``count`` cubes on the table, bob's (red) on his half and toby's (blue) on his,
+    each with the spot where it must end; the spec's own cubes make way for them."""
+    for name in [name for name in world.objects if name.startswith("cube_")]:
+        world.remove_object(name)
     cubes: list[Cube] = []
     for bob_spot, toby_spot in swap_spots(count, rng):
         for arm, start, end in (("bob", bob_spot, toby_spot), ("toby", toby_spot, bob_spot)):
             if len(cubes) == count:
                 break
-            other = "toby" if arm == "bob" else "bob"
             x, y = spot(arm, start) + rng.uniform(-JITTER_M, JITTER_M, 2)
-            rpy = (0.0, 0.0, rng.uniform(-JITTER_DEG, JITTER_DEG))
             name = f"cube_{len(cubes) + 1}"
-            if name in spare:
-                spare.remove(name)
-                world.object(name).set_pose((x, y, CUBE_Z_M), rpy)
-            else:
-                world.add_object(
-                    name,
-                    "box",
-                    size=(CUBE_M, CUBE_M, CUBE_M),
-                    mass=CUBE_KG,
-                    color=COLOURS[arm == "toby"],
-                    at=(x, y, CUBE_Z_M),
-                    rpy_deg=rpy,
-                )
-            cubes.append(Cube(name, arm, spot(other, end)))
-    for name in spare:
-        world.remove_object(name)
+            world.add_object(
+                name,
+                "box",
+                size=(CUBE_M, CUBE_M, CUBE_M),
+                mass=CUBE_KG,
+                color=COLOURS[arm == "toby"],
+                at=(x, y, CUBE_Z_M),
+                rpy_deg=(0.0, 0.0, rng.uniform(-JITTER_DEG, JITTER_DEG)),
+            )
+            cubes.append(Cube(name, arm, spot("toby" if arm == "bob" else "bob", end)))
     return cubes
 
 
@@ -327,7 +320,7 @@ class Outcome:
     plans: int
     median_planning_ms: float
     simulated_s: float
-    wall_s: float
+    wall_s: float  # of the work, after the launch
     gave_up: str = ""  # a motion that could not be planned in ATTEMPTS tries
 
     @property
@@ -356,52 +349,89 @@ class Outcome:
         return "\n".join(lines)
 
 
-def run(cubes: int = 20, seed: int = 0, *, viewer: bool = False, quiet: bool = False) -> Outcome:
-    """Launch the cell, swap ``cubes`` cubes (placed by ``seed``), and say how it went."""
+def work(
+    world: armfleet.World,
+    cubes: list[Cube],
+    seed: int = 0,
+    *,
+    realtime: bool = False,
+    quiet: bool = False,
+) -> Outcome:
+    """Swap ``cubes`` (set out by :func:`set_out_cubes`) in ``world`` and say how it went."""
     began = time.perf_counter()
+    tally = Tally()
+    world.bus.subscribe("/collisions", lambda report: tally.on_collisions(world, report))
+    gave_up = ""
+    try:
+        swap(Cell(world, tally, realtime=realtime), cubes, quiet=quiet)
+    except PlanningFailed as exc:
+        gave_up = str(exc)
+    errors = [cube.error_m(world) for cube in cubes]
+    return Outcome(
+        seed=seed,
+        cubes=len(cubes),
+        placed=sum(e <= TOLERANCE_M for e in errors),
+        worst_error_m=max(errors),
+        arm_arm_contacts=tally.arm_arm,
+        arm_obstacle_contacts=tally.arm_obstacle,
+        stops=world.safety.stops,
+        replans=tally.replans,
+        plans=len(tally.planning_ms),
+        median_planning_ms=float(np.median(tally.planning_ms)) if tally.planning_ms else 0.0,
+        simulated_s=world.time,
+        wall_s=time.perf_counter() - began,
+        gave_up=gave_up,
+    )
+
+
+def run(cubes: int = 20, seed: int = 0, *, viewer: bool = False, quiet: bool = False) -> Outcome:
+    """Launch the cell, swap ``cubes`` cubes (set out by ``seed``), and say how it went."""
     world = armfleet.launch("shared_cell", viewer=viewer)
     try:
         if viewer and world.viewer is not None:
             print(f"viewer: {world.viewer.url}", flush=True)
         placed = set_out_cubes(world, cubes, np.random.default_rng(seed))
-        tally = Tally()
-        world.bus.subscribe("/collisions", lambda report: tally.on_collisions(world, report))
-        gave_up = ""
-        try:
-            swap(Cell(world, tally, realtime=viewer), placed, quiet=quiet)
-        except PlanningFailed as exc:
-            gave_up = str(exc)
-        errors = [cube.error_m(world) for cube in placed]
-        return Outcome(
-            seed=seed,
-            cubes=cubes,
-            placed=sum(e <= TOLERANCE_M for e in errors),
-            worst_error_m=max(errors),
-            arm_arm_contacts=tally.arm_arm,
-            arm_obstacle_contacts=tally.arm_obstacle,
-            stops=world.safety.stops,
-            replans=tally.replans,
-            plans=len(tally.planning_ms),
-            median_planning_ms=float(np.median(tally.planning_ms)) if tally.planning_ms else 0,
-            simulated_s=world.time,
-            wall_s=time.perf_counter() - began,
-            gave_up=gave_up,
-        )
+        return work(world, placed, seed, realtime=viewer, quiet=quiet)
     finally:
         world.close()
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line on stderr (exit status 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: {message}\n")
+
+
+def count(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: a whole number in [low, high]."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = low - 1
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number in [{low}, {high}]")
+        return value
+
+    return parse
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = OneLineParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-viewer", action="store_true", help="run headless")
     parser.add_argument(
-        "--cubes", type=int, default=20, help=f"cubes to move, 1 to {MAX_CUBES} (default 20)"
+        "--cubes",
+        type=count(1, MAX_CUBES),
+        default=20,
+        help=f"cubes to move, 1 to {MAX_CUBES}, one per spot (default 20)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="where the cubes start (default 0)")
+    parser.add_argument(
+        "--seed", type=count(0, 2**32 - 1), default=0, help="where the cubes start (default 0)"
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     args = parser.parse_args()
-    if not 1 <= args.cubes <= MAX_CUBES:
-        parser.error(f"--cubes must be in [1, {MAX_CUBES}] (there are {MAX_CUBES} spots)")
     outcome = run(args.cubes, args.seed, viewer=not args.no_viewer, quiet=args.quiet)
     print(outcome)
     sys.exit(0 if outcome.success else 1)
