@@ -7,6 +7,8 @@ sockets: one for requests (one frame each, one reply each), one for streams
 - request:  ``{"id": int, "op": str, "args": {...}, "timeout_s": float}``
 - reply:    ``{"kind": "reply", "id": int | None, "ok": true, "result": ...}``
   or ``{"kind": "reply", "id": ..., "ok": false, "error": {"type": str, "message": str}}``
+  (a ``PlanningFailed`` error also has ``"fields"``: its reason, arms, links, samples and
+  blocking arm, from which the client raises it again; see :mod:`armfleet.remote.errors`)
 - stream:   ``{"kind": "messages", "items": [[sub, dropped, type, message], ...]}``,
   ``{"kind": "tick"}`` (every second, so both ends notice the other going away),
   ``{"kind": "ended", "sub": int, "reason": str}`` (the topic went away: no more messages),
