@@ -39,7 +39,9 @@ import armfleet
 import argparse
 import json
 import logging
+import os
 import platform
+import subprocess
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -317,8 +319,23 @@ def straight_pass(spec: FleetSpec, cell: Cell, problems: list[CellProblem]) -> l
     return results
 
 
+def source_version() -> dict[str, Any]:
+    """The commit measured, and whether armfleet/planning/ differs from it."""
+    root = Path(__file__).resolve().parents[1]
+
+    def git(*args: str) -> str:
+        result = subprocess.run(["git", *args], cwd=root, capture_output=True, text=True)
+        return result.stdout.strip() if result.returncode == 0 else ""
+
+    return {
+        "commit": git("rev-parse", "--short", "HEAD"),
+        "planning_changed_since": bool(git("status", "--porcelain", "armfleet/planning")),
+    }
+
+
 def run(count: int, seed: int) -> dict[str, Any]:
     spec = load_spec(SPEC)
+    load_before = os.getloadavg()[0]
     world = armfleet.launch(spec, viewer=False)
     try:
         started = time.perf_counter()
@@ -337,6 +354,7 @@ def run(count: int, seed: int) -> dict[str, Any]:
     classes = summarise(records)
     return {
         "machine": {"python": platform.python_version(), "processor": platform.machine()},
+        "source": source_version(),
         "settings": {
             "spec": SPEC.name,
             "problems": count,
@@ -348,6 +366,7 @@ def run(count: int, seed: int) -> dict[str, Any]:
             "recheck_us_per_state": round(
                 cell.reference.seconds / max(1, cell.reference.checks) * 1e6, 1
             ),
+            "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)],
             "wall_s": {
                 "planned_world": round(planned_s, 1),
                 "straight_world": round(straight_s, 1),

@@ -172,7 +172,7 @@ def _table_rows(phases: Sequence[str]) -> list[tuple[str, Callable[[dict[str, An
 
     def tracking(r: dict[str, Any]) -> str:
         e = r["execution"]
-        return f"{e['tracking_error_mrad_median']} / {e['tracking_error_mrad_max']}"
+        return f"{_round(e['tracking_error_mrad_median'])} / {_round(e['tracking_error_mrad_max'])}"
 
     def pose_error(r: dict[str, Any]) -> str:
         e = r["execution"]
@@ -194,7 +194,8 @@ def _table_rows(phases: Sequence[str]) -> list[tuple[str, Callable[[dict[str, An
     rows += [(f"  {name} ms median (share)", phase(name)) for name in phases]
     rows += [
         ("  other (share)", lambda r: f"{r['time_share']['other'] or 0:.0%}"),
-        ("collision checks median", lambda r: str(r["checks_median"])),
+        ("collision checks / samples median",
+         lambda r: f"{r['checks_median']} / {r['samples_median']}"),
         ("  us per check median (upper bound)", lambda r: str(r["us_per_check_median"])),
         ("scene build after respawn ms median", lambda r: str(r["scene_build_ms_median"])),
         ("straight line proven clear", lambda r: str(r["straight_line_proven_clear"])),
@@ -221,7 +222,8 @@ def print_report(figures: dict[str, Any]) -> None:
     print(
         f"\nshared cell, {settings['problems']} problems (seed {settings['seed']}, every "
         f"{settings['pose_goals_every']}rd with pose goals), timeout {settings['timeout_s']} s, "
-        f"clearance {settings['clearance_m'] * 1e3:g} mm"
+        f"clearance {settings['clearance_m'] * 1e3:g} mm; machine load "
+        f"{' -> '.join(map(str, settings['load_average_1min']))} (1 min, before -> after)"
     )
     lines: list[tuple[str, ...]] = [("", *classes)]
     for label, cell in _table_rows(PHASES):
