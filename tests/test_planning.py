@@ -166,6 +166,80 @@ def test_a_swap_whose_straight_motion_hits_the_post_is_planned_around_it() -> No
             assert np.abs(arm.positions - goals[name]).max() < ARRIVAL_RAD
 
 
+# -- seeded problems across the table ---------------------------------------------------------
+#: Obstacles of the shared cell an arm is measured against (besides the other arm).
+CELL_OBSTACLES = ("table", "post", "wall_left", "wall_right")
+#: Steps between two PyBullet distance measurements during a run (contacts: every step).
+GAP_EVERY_STEPS = 5
+
+
+def far_side_goals(
+    world: armfleet.World, arms: tuple[str, ...], seed: int
+) -> dict[str, FloatArray]:
+    """Per arm, a joint goal with its tool pointing down over the far half of the table
+    (past the post), drawn from ``seed``; drawn again until the request is not refused
+    for its goal (in collision with the other arm's goal or the cell)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(50):
+        goals = {}
+        for name in arms:
+            arm = world.arm(name)
+            base_x, toward = (0.0, 1.0) if name == "bob" else (0.9, -1.0)
+            xyz = (
+                base_x + toward * rng.uniform(0.5, 0.68),
+                rng.uniform(-0.35, 0.35),
+                rng.uniform(0.3, 0.55),
+            )
+            try:
+                goals[name] = arm.solve_ik(tool_down(xyz, 0.0 if name == "bob" else math.pi))
+            except armfleet.ArmfleetError:
+                break
+        else:
+            try:
+                world.plan(goals, timeout_s=0.001)
+            except PlanningFailed as failure:
+                if failure.reason is not FailureReason.GOAL_IN_COLLISION:
+                    return goals
+            else:
+                return goals
+    raise AssertionError(f"no clear far-side goals for {arms} from seed {seed}")
+
+
+@pytest.mark.parametrize(
+    ("arms", "seed"),
+    [
+        pytest.param(("bob",), 0, id="bob alone, seed 0"),
+        pytest.param(("bob",), 2, id="bob alone, seed 2"),
+        pytest.param(("bob", "toby"), 1, id="bob and toby jointly, seed 1"),
+        pytest.param(("bob", "toby"), 5, id="bob and toby jointly, seed 5"),
+    ],
+)
+def test_planned_motions_across_the_table_touch_nothing(arms: tuple[str, ...], seed: int) -> None:
+    """Seeded goals over the far half of the table, planned and run: no contact on
+    /collisions, no stop, PyBullet's distance from each arm to the table, post, walls
+    and the other arm never under the clearance less the hull slack, goals reached."""
+    with shared_cell() as world:
+        goals = far_side_goals(world, arms, seed)
+        plan = world.plan(goals)
+        watch = Watch(world)
+        ids = body_ids(world)
+        others = {name: [*CELL_OBSTACLES, *(a for a in world.arms if a != name)] for name in arms}
+        nearest = {name: math.inf for name in arms}
+
+        def on_step(w: armfleet.World) -> None:
+            watch(w)
+            if len(watch.moving) % GAP_EVERY_STEPS == 0:
+                for name in arms:
+                    for other in others[name]:
+                        nearest[name] = min(nearest[name], gap(w, name, other, ids=ids))
+
+        world.run(world.execute(plan) + 0.3, on_step=on_step)
+        assert watch.contacts == [] and watch.stops == 0
+        assert min(nearest.values()) >= plan.clearance_m - CLEARANCE_SLACK_M, (plan, nearest)
+        for name in arms:
+            assert np.abs(world.arm(name).positions - goals[name]).max() < ARRIVAL_RAD
+
+
 # -- refusals -------------------------------------------------------------------------------
 #: How far inside the 10 mm clearance the refused starts and goals are [m]: 5 mm away from
 #: the obstacle by PyBullet's distance (in the clearance, not touching).
