@@ -38,6 +38,7 @@ from armfleet.messages import (
     PlannedMotion,
     Positions,
 )
+from armfleet.planning.move_options import MoveOptions
 from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 from armfleet.robot_state_publisher import RobotStatePublisher
 from armfleet.safety_supervisor import SafetySupervisor
@@ -267,8 +268,8 @@ class Arm:
         positions: Positions,
         *,
         avoid_collisions: bool = False,
-        clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_TIMEOUT_S,
+        clearance_m: float | None = None,
+        timeout_s: float | None = None,
     ) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
 
@@ -284,8 +285,11 @@ class Arm:
             ProtectiveStopError, ArmFault: nothing is sent and the current motion goes on.
             PlanningFailed, ArmInMotion: with ``avoid_collisions``; nothing moves.
         """
-        if flag(avoid_collisions, "avoid_collisions"):
-            planned = self.plan(positions, clearance_m=clearance_m, timeout_s=timeout_s)
+        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s)
+        if options.avoid_collisions:
+            planned = self.plan(
+                positions, clearance_m=options.clearance_m, timeout_s=options.timeout_s
+            )
             return self._world_planner().execute(planned)
         values = self._position_controller.validate(positions)
         if self._controller_manager.fault is not None:
@@ -411,8 +415,8 @@ class Arm:
         link: str = "tool0",
         linear: bool = False,
         avoid_collisions: bool = False,
-        clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_TIMEOUT_S,
+        clearance_m: float | None = None,
+        timeout_s: float | None = None,
     ) -> float:
         """Move ``link`` to ``pose`` (in ``frame``); returns at once the planned duration [s].
 
@@ -427,13 +431,16 @@ class Arm:
             :meth:`move_to`; PlanningFailed with ``avoid_collisions``.
         """
         linear = flag(linear, "linear")
-        if flag(avoid_collisions, "avoid_collisions"):
+        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s)
+        if options.avoid_collisions:
             if linear:
                 raise ArmfleetError(
                     f"{self._name}: choose linear=True (a straight tool line) or "
                     "avoid_collisions=True (a planned path around obstacles), not both"
                 )
-            plan = self.plan(pose, frame, link=link, clearance_m=clearance_m, timeout_s=timeout_s)
+            plan = self.plan(
+                pose, frame, link=link, clearance_m=options.clearance_m, timeout_s=options.timeout_s
+            )
             return self._world_planner().execute(plan)
         if self._controller_manager.fault is not None:
             raise ArmFault(self._name, self._controller_manager.fault)

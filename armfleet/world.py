@@ -51,6 +51,7 @@ from armfleet.objects.object_spec import (
     DEFAULT_SPINNING_FRICTION_M,
 )
 from armfleet.planning import MotionPlanner, Plan, PoseGoal
+from armfleet.planning.move_options import MoveOptions
 from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 from armfleet.request_queue import RequestQueue
 from armfleet.safety_supervisor import SafetySupervisor
@@ -226,8 +227,8 @@ class World:
         targets: Mapping[str, Positions | Any],
         *,
         avoid_collisions: bool = False,
-        clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_TIMEOUT_S,
+        clearance_m: float | None = None,
+        timeout_s: float | None = None,
     ) -> float:
         """Move several arms so they start on the same step and finish at the same instant.
 
@@ -252,8 +253,9 @@ class World:
             raise ArmfleetError(
                 f"move_together takes a mapping {{arm name: target}}, got {type(targets).__name__}"
             )
-        if flag(avoid_collisions, "avoid_collisions"):
-            plan = self.plan(targets, clearance_m=clearance_m, timeout_s=timeout_s)
+        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s)
+        if options.avoid_collisions:
+            plan = self.plan(targets, clearance_m=options.clearance_m, timeout_s=options.timeout_s)
             return self._planner.execute(plan)
         return move_together({name: (self.arm(name), t) for name, t in targets.items()})
 

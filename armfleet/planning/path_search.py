@@ -89,7 +89,7 @@ def find_path(problem: PlanningProblem, search: OmplRrtConnect | None = None) ->
     raise PlanningFailed(
         FailureReason.NO_PATH,
         f"no clear path within {problem.timeout_s:g} s ({samples} samples tried); "
-        "give more time (timeout_s), less clearance, or another goal",
+        "give more time (timeout_s; --planning-timeout), less clearance, or another goal",
         arms=problem.arms,
         samples=samples,
         problem=problem,
