@@ -228,7 +228,7 @@ def planned_pass(spec: FleetSpec, cell: Cell, problems: list[CellProblem]) -> li
                 world.plan({problem.arms[0]: world.arm(problem.arms[0]).positions})
                 outcome.scene_build_ms = (time.perf_counter() - began) * 1e3
             except armfleet.ArmfleetError as exc:
-                outcome.error = f"could not start: {exc}"
+                outcome.error, outcome.reason = f"could not start: {exc}", "could not start"
                 continue
             log.take()
             outcome.attempted = True
@@ -255,6 +255,10 @@ def plan_and_execute(
         outcome.request_ms = (time.perf_counter() - began) * 1e3
         outcome.error, outcome.reason = str(exc), exc.reason.value
         return
+    except armfleet.ArmfleetError as exc:  # not a planning failure: kept, counted, shown
+        outcome.request_ms = (time.perf_counter() - began) * 1e3
+        outcome.error, outcome.reason = str(exc), type(exc).__name__
+        return
     outcome.request_ms = (time.perf_counter() - began) * 1e3
     outcome.solved = True
     outcome.planner_ms = plan.planning_time_s * 1e3
@@ -266,7 +270,13 @@ def plan_and_execute(
     outcome.length_ratio = round(plan.length_rad / line, 4) if line > 0 else 1.0
     outcome.recheck_touches = cell.recheck(problem, plan.waypoints)
     stops = world.safety.stops
-    run_until_still(world, world.execute(plan))
+    try:
+        duration = world.execute(plan)
+    except armfleet.ArmfleetError as exc:
+        outcome.solved = False
+        outcome.error, outcome.reason = f"execute: {exc}", "execute refused"
+        return
+    run_until_still(world, duration)
     touches = log.take()
     outcome.contact_steps, outcome.pairs = touches.steps, sorted("/".join(p) for p in touches.pairs)
     outcome.deepest_mm = round(touches.deepest_m * 1e3, 3)

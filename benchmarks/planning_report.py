@@ -42,9 +42,7 @@ def class_row(records: Sequence[Record]) -> dict[str, Any]:
     phase_sums = {k: sum(r["phases_ms"].get(k, 0.0) for r in solved) for k in PHASES}
     pose = [r for r in attempted if r["goal"] == "pose"]
     straight = [r for r in records if not r["straight"]["refused"]]
-    failures = collections.Counter(
-        r["reason"] or "could not reach the start" for r in records if not r["solved"]
-    )
+    failures = collections.Counter(r["reason"] or "unknown" for r in records if not r["solved"])
     tracking = [r["tracking_error_rad"] * 1e3 for r in solved]
     return {
         "problems": len(records),
