@@ -101,3 +101,44 @@ def test_a_plan_blocked_by_a_moving_arm_names_it_and_nothing_moves() -> None:
         world.run(0.1)  # toby has not reached bob yet
         assert sent == [] and not bob.is_moving
         assert np.abs(bob.positions - before).max() < HOLD_DRIFT_RAD
+
+
+#: toby crosses in front of the post, from one side of the table to the other.
+TOBY_CROSSING_M = ((0.55, 0.3, 0.6), (0.55, -0.3, 0.6))
+BOB_OVER_THE_POST_M = (0.45, 0.0, 0.65)
+
+
+def test_a_plan_waits_at_its_start_for_a_moving_arm_to_pass() -> None:
+    """toby crosses the table in front of the post; bob plans a move over the post that
+    would meet toby if it started at once (PyBullet, with toby's recorded reference): the
+    plan waits at its start (start_delay_s > 0), bob's reference holds still for that
+    long, and the two pass with no contact and no stop."""
+    with shared_cell() as world:
+        bob, toby = world.arm("bob"), world.arm("toby")
+        first, second = TOBY_CROSSING_M
+        world.run(toby.move_to_pose(tool_down(first, math.pi), avoid_collisions=True) + 0.1)
+        watch = Watch(world)
+        toby_duration = toby.move_to_pose(tool_down(second, math.pi), avoid_collisions=True)
+        watch.run(0.02)
+        plan = bob.plan(tool_down(BOB_OVER_THE_POST_M))
+        assert plan.start_delay_s > 0.0, plan
+        planned_at = len(watch.moving)
+        start = bob.positions
+        duration = world.execute(plan)
+        watch.run(max(duration, toby_duration) + 0.3)
+        assert watch.contacts == [] and watch.stops == 0
+        left = watch.first_step_leaving("bob", start) - planned_at
+        assert left * world.dt == pytest.approx(plan.start_delay_s, abs=2 * world.dt)
+        # Without the wait bob would have met toby: bob's path undelayed against toby's
+        # reference as it was run, every 20 ms, in a scratch cell.
+        toby_reference = [refs["toby"] for refs in watch.references[planned_at:]]
+        steps = range(0, min(len(toby_reference), round(plan.timing.duration / world.dt)), 20)
+        undelayed = plan.timing.at(np.array([(i + 1) * world.dt for i in steps]))[0]
+        with shared_cell() as scratch:
+            closest = min(
+                gap_at(scratch, {"bob": row, "toby": toby_reference[i]}, "bob", "toby")
+                for i, row in zip(steps, undelayed, strict=True)
+            )
+        print(f"undelayed closest {closest * 1000:.1f} mm, delay {plan.start_delay_s:.3f} s")
+        assert closest < plan.clearance_m, closest
+        assert np.abs(bob.positions - plan.waypoints[-1]).max() < ARRIVAL_RAD
