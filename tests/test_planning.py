@@ -360,13 +360,6 @@ def test_a_refused_plan_is_one_line_and_nothing_moves(
             assert np.abs(arm.positions - old).max() < HOLD_DRIFT_RAD
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: CollisionChecker.collision() names the first geometry pair within its "
-    "margin with that pair's distance, not the closest pair: fingertips 5 mm into the "
-    "floor are reported as 'bob_panda_leftfinger is 9.3 mm from ground' (the distance of "
-    "the finger's upper box) instead of 'touches'",
-)
 def test_a_goal_in_collision_states_the_depth_pybullet_sees() -> None:
     """bob's fingertips 5 mm into the floor (PyBullet) at the goal: the refusal says the
     finger touches the floor, not that it is some mm away."""

@@ -315,12 +315,6 @@ def finger_floor_gap(world: armfleet.World, arm: armfleet.Arm, state: FloatArray
     return float(gap)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: the floor is a coal Halfspace whose AABB (z <= 0) the broadphase does not "
-    "widen by the margin, so CollisionChecker.valid lets a finger 5-10 mm over the floor "
-    "pass at clearance 10 mm (pair-by-pair collision() does see it)",
-)
 def test_a_finger_within_the_clearance_of_the_floor_is_a_goal_in_collision() -> None:
     """bob's fingertips 6 mm over the floor (PyBullet's distance), tool pointing down:
     closer than the 10 mm clearance, so the goal is refused, naming a finger and the floor."""

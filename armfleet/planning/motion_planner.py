@@ -122,9 +122,8 @@ class MotionPlanner:
         seconds["ik"] = time.perf_counter() - mark
         lower = np.concatenate([arm.position_controller.lower for arm in arms])
         upper = np.concatenate([arm.position_controller.upper for arm in arms])
-        remaining = timeout_s - (time.perf_counter() - began)
-        problem = PlanningProblem(names, start, goal, lower, upper, checker, max(remaining, 1e-3))
-        path = find_path(problem)
+        problem = PlanningProblem(names, start, goal, lower, upper, checker, timeout_s)
+        path = find_path(problem, deadline=began + timeout_s)
         seconds.update(path.seconds)
         mark = time.perf_counter()
         timed = TimedPath(path.waypoints, _limits(arms))

@@ -25,6 +25,10 @@ from armfleet.planning.problem import PlanningProblem
 
 # OMPL reports each search on the console; a failed search is reported by PlanningFailed.
 ou.setLogLevel(ou.LOG_ERROR)
+#: Seed of OMPL's random numbers, set once per process before any search: the same
+#: requests in the same order give the same plans, run after run.
+OMPL_SEED = 16
+ou.RNG.setSeed(OMPL_SEED)
 
 #: Motion-check step as a fraction of the state space's extent (OMPL's resolution).
 MOTION_RESOLUTION = 0.01

@@ -44,8 +44,14 @@ class JointPath:
         return float(np.sum(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1)))
 
 
-def find_path(problem: PlanningProblem, search: OmplRrtConnect | None = None) -> JointPath:
-    """A proven-clear path for ``problem``.
+def find_path(
+    problem: PlanningProblem,
+    search: OmplRrtConnect | None = None,
+    deadline: float | None = None,
+) -> JointPath:
+    """A proven-clear path for ``problem``, by ``deadline`` (``time.perf_counter()`` time;
+    ``problem.timeout_s`` from now by default: a request that spent some of its budget
+    before, on IK and the scene, passes its own).
 
     Raises:
         PlanningFailed: the start or the goal is closer than the clearance to
@@ -55,7 +61,8 @@ def find_path(problem: PlanningProblem, search: OmplRrtConnect | None = None) ->
     search = search or OmplRrtConnect()
     checker = problem.checker
     began = time.perf_counter()
-    deadline = began + problem.timeout_s
+    if deadline is None:
+        deadline = began + problem.timeout_s
     checks_before = checker.checks
     for state, reason in (
         (problem.start, FailureReason.START_IN_COLLISION),

@@ -32,6 +32,9 @@ from armfleet.messages import FloatArray
 from armfleet.planning.object_geometry import convex_hull
 
 GROUND = "ground"
+#: The floor: a slab whose top is z = 0 [m].
+FLOOR_SIZE_M = 200.0
+FLOOR_THICKNESS_M = 1.0
 #: Largest margin between two links of one arm [m] (the clearance, if smaller).
 SELF_CLEARANCE_M = 0.01
 #: Wider margins of the "far from everything" check [m]: between bodies, within an arm.
@@ -145,11 +148,11 @@ class PlanningScene:
         self._arms = {arm.name: arm for arm in arms}
         #: Per geometry: the body it belongs to (arm or object name, or ground).
         owners = [self._arm_of(model, item.parentJoint) for item in geometry.geometryObjects]
-        geometry.addGeometryObject(
-            pin.GeometryObject(
-                GROUND, 0, pin.SE3.Identity(), coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0)
-            )
-        )
+        # The floor as a slab, as PyBullet's: a half-space's bounding box would not grow by
+        # the margin in the broadphase, which then misses what is within it of the floor.
+        floor = pin.SE3(np.eye(3), np.array([0.0, 0.0, -FLOOR_THICKNESS_M / 2]))
+        slab = coal.Box(FLOOR_SIZE_M, FLOOR_SIZE_M, FLOOR_THICKNESS_M)
+        geometry.addGeometryObject(pin.GeometryObject(GROUND, 0, floor, slab))
         owners.append(GROUND)
         for obj in objects:
             joint = 0
@@ -377,19 +380,22 @@ class CollisionChecker:
         return not pin.computeCollisions(model, data, self._far_manager, q, True)
 
     def collision(self, state: FloatArray) -> tuple[str, str, float] | None:
-        """The first pair closer than its margin at ``state``: (link, link, distance [m]),
-        or None. Pair by pair: slower than :meth:`valid`, for messages."""
+        """The closest of the pairs closer than their margin at ``state``: (link, link,
+        distance [m]; negative: inside each other), or None. Pair by pair: slower than
+        :meth:`valid`, for messages."""
         scene = self.scene
         q = self._q.copy()
         q[self.columns] = state
         pin.updateGeometryPlacements(scene.model, self._model_data, scene.geometry, self.data, q)
+        closest: tuple[str, str, float] | None = None
         for index in np.flatnonzero(self.active):
             if pin.computeCollision(scene.geometry, self.data, int(index)):
                 pair = scene.geometry.collisionPairs[int(index)]
                 distance = pin.computeDistance(scene.geometry, self.data, int(index))
-                return (
-                    scene.body_link(pair.first),
-                    scene.body_link(pair.second),
-                    float(distance.min_distance),
-                )
-        return None
+                if closest is None or distance.min_distance < closest[2]:
+                    closest = (
+                        scene.body_link(pair.first),
+                        scene.body_link(pair.second),
+                        float(distance.min_distance),
+                    )
+        return closest
