@@ -25,7 +25,7 @@ import argparse
 import math
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import NoReturn
 
@@ -33,25 +33,31 @@ import numpy as np
 
 import armfleet
 from armfleet.messages import CollisionReport
-from armfleet.planning import PlanningFailed, PoseGoal
+from armfleet.planning import PlanningFailed
 
 CUBE_M = 0.04  # side of a cube
 CUBE_KG = 0.1
 CUBE_Z_M = 0.17  # a cube's centre resting on the table (top at 0.15 m)
 MIDDLE_X_M = 0.45  # the table's middle line, between bob's half and toby's
-#: Cube spots on bob's half (x, y) [m]; toby's are mirrored about the middle line.
-#: 11 cm apart across the fingers (open: 8 cm), clear of the post and the walls.
-SPOTS_M = tuple((x, y) for x in (0.29, 0.37) for y in (-0.38, -0.27, -0.16, 0.16, 0.27, 0.38))
+#: Cube spots on bob's half (x, y) [m]; toby's are these turned 180 degrees about the
+#: table's centre, as toby is bob turned. 11 cm apart across the fingers (open: 8 cm),
+#: clear of the post and the walls. None at y = +0.16: toby's forearm, reaching down
+#: there from its home posture's branch, comes within 1 cm of the post (and bob's at
+#: toby's y = -0.16).
+SPOTS_M = tuple((x, y) for x in (0.29, 0.37) for y in (-0.38, -0.27, -0.16, 0.27, 0.38))
 MAX_CUBES = 2 * len(SPOTS_M)
 ABOVE_M = 0.06  # approach and leave every cube from this high
-DROP_M = 0.002  # a cube is let go this far above the table
 JITTER_M, JITTER_DEG = 0.005, 10.0  # random start of each cube around its spot
 TOLERANCE_M = 0.01  # a cube's centre ends this close to its spot (a quarter of its side)
 GRIP_S = 0.5  # time for the fingers to close or open
+#: Grasp force per finger [N] (the default 20 N let a cube turn in the fingers by 2 degrees
+#: in a fast crossing, and such a cube could skid when let go).
+GRASP_N = 60.0
 SETTLE_S = 0.1  # wait after a motion's planned duration
 POLL_S = 0.02  # how often a waiting arm looks again
 RETRY_S = 0.25  # wait before planning again when the other arm is in the way
 ATTEMPTS = 40  # plans tried for one motion before giving up
+PLANNING_TIMEOUT_S = 2.0  # per plan
 DOWN = np.diag([1.0, -1.0, -1.0, 1.0])  # tcp z down, x along the frame's x
 COLOURS = ((0.85, 0.2, 0.2, 1.0), (0.2, 0.6, 0.85, 1.0))  # bob's cubes, toby's cubes
 
@@ -76,7 +82,7 @@ def lifted(pose: np.ndarray, height: float = ABOVE_M) -> np.ndarray:
 def spot(side: str, index: int) -> np.ndarray:
     """The ``index``-th cube spot on ``side``'s half of the table (x, y) [m]."""
     x, y = SPOTS_M[index]
-    return np.array([x, y] if side == "bob" else [2 * MIDDLE_X_M - x, y])
+    return np.array([x, y] if side == "bob" else [2 * MIDDLE_X_M - x, -y])
 
 
 @dataclass
@@ -148,27 +154,19 @@ class Cell:
                 world.run(max(min(wake.values()) - world.time, world.dt), realtime=self.realtime)
 
     # -- motions ---------------------------------------------------------------------------
-    def planned(self, arm: armfleet.Arm, pose: np.ndarray) -> Task:
-        """Move ``arm``'s tcp to ``pose`` around everything, trying again while the other
-        arm is in the way."""
-        for attempt in range(ATTEMPTS):
-            try:
-                plan = arm.plan(pose, link="tcp")
-            except PlanningFailed:
-                if attempt == ATTEMPTS - 1:
-                    raise
-                self.tally.replans += 1
-                yield RETRY_S
-                continue
-            self.tally.planning_ms.append(plan.planning_time_s * 1000)
-            yield self.world.execute(plan) + SETTLE_S
-            return
+    def reach(self, arm: armfleet.Arm, pose: np.ndarray) -> np.ndarray:
+        """Joint positions that put ``arm``'s tcp at ``pose``, on the branch of its home
+        posture (elbow up, wrist as at home), so that the straight moves down from there
+        stay on it. (A pose goal may be solved on any branch clear of collisions.)"""
+        positions: np.ndarray = arm.solve_ik(pose, link="tcp", seed=arm.description.home)
+        return positions
 
-    def together(self, targets: dict[str, PoseGoal | tuple[float, ...]]) -> Task:
-        """Move the arms to ``targets`` (tcp poses or joint positions), planned jointly."""
+    def planned(self, goals: Mapping[str, np.ndarray | Sequence[float]]) -> Task:
+        """Move the arms to ``goals`` (joint positions by arm name) around everything,
+        planned jointly when there are several; try again while another arm is in the way."""
         for attempt in range(ATTEMPTS):
             try:
-                plan = self.world.plan(targets, timeout_s=2.0)
+                plan = self.world.plan(goals, timeout_s=PLANNING_TIMEOUT_S)
             except PlanningFailed:
                 if attempt == ATTEMPTS - 1:
                     raise
@@ -191,7 +189,7 @@ class Cell:
 
     def grip(self, arm: armfleet.Arm, close: bool) -> Task:
         if close:
-            arm.gripper.close()  # the fingers only move inwards: no wait
+            arm.gripper.close(GRASP_N)  # the fingers only move inwards: no wait
         else:
             yield from self.still_others(arm)  # opening widens the hand
             arm.gripper.open()
@@ -210,7 +208,7 @@ class Cell:
 
     def pick(self, arm: armfleet.Arm, cube: Cube) -> Task:
         pose = self.grasp(arm, cube)
-        yield from self.planned(arm, lifted(pose))
+        yield from self.planned({arm.name: self.reach(arm, lifted(pose))})
         yield from self.straight(arm, pose)
         yield from self.grip(arm, close=True)
         yield from self.straight(arm, lifted(pose))
@@ -220,36 +218,41 @@ class Cell:
         world = self.world
         tcp = world.tf.lookup("world", f"{arm.name}_tcp")
         cube_in_tcp = np.linalg.solve(tcp, world.tf.lookup("world", cube.name))
-        where = frame((*cube.target, CUBE_Z_M + DROP_M), math.radians(arm.pose.yaw_deg))
+        # the cube ends turned as it is in the hand (a multiple of 90 degrees from the
+        # grasp), so that the hand ends facing the arm's way, as it picked
+        turn = math.atan2(cube_in_tcp[1, 0], cube_in_tcp[0, 0])
+        where = frame((*cube.target, CUBE_Z_M), math.radians(arm.pose.yaw_deg) + turn)
         pose: np.ndarray = where @ np.linalg.inv(cube_in_tcp)
         return pose
 
-    def place(self, arm: armfleet.Arm, pose: np.ndarray) -> Task:
+    def place(self, arm: armfleet.Arm, cube: Cube) -> Task:
+        """Set the held ``cube`` down on the table, resting (a cube let go above the table
+        can stay on the finger that opens last), and leave it."""
+        pose = self.place_pose(arm, cube)  # again: the cube may have turned in the fingers
         yield from self.straight(arm, pose)
         yield from self.grip(arm, close=False)
         yield from self.straight(arm, lifted(pose))
 
-    def place_and_pick(
-        self, arm: armfleet.Arm, carried: tuple[Cube, np.ndarray] | None, cube: Cube | None
-    ) -> Task:
-        """Put the ``carried`` cube down at its pose (if any), then pick ``cube`` (if any)."""
+    def place_and_pick(self, arm: armfleet.Arm, carried: Cube | None, cube: Cube | None) -> Task:
+        """Put the ``carried`` cube down (if any), then pick ``cube`` (if any)."""
         if carried is not None:
-            yield from self.place(arm, carried[1])
+            yield from self.place(arm, carried)
         if cube is not None:
             yield from self.pick(arm, cube)
 
 
 def swap_spots(count: int, rng: np.random.Generator) -> list[tuple[int, int]]:
-    """Per round, the spot (index in :data:`SPOTS_M`) bob picks from and toby's spot whose
-    cube toby picks; the arms then swap them. The two lie on opposite sides of y = 0 (so
-    the arms reach past each other, not into each other) and the sides alternate."""
-    sides = [[i for i, (_, y) in enumerate(SPOTS_M) if (y > 0) == positive] for positive in (0, 1)]
-    bob_order = [list(rng.permutation(side)) for side in sides]
-    toby_order = [list(rng.permutation(side)) for side in sides]
-    pairs = []
-    for rank in range((count + 1) // 2):
-        side = rank % 2  # bob's spot on this side of y = 0, toby's on the other
-        pairs.append((int(bob_order[side][rank // 2]), int(toby_order[1 - side][rank // 2])))
+    """Per round, bob's spot and toby's spot (indices in :data:`SPOTS_M`) whose cubes the
+    arms swap. Toby's spot is on the other side of y = 0 from bob's, so the arms reach
+    past each other, not into each other; the sides alternate while both have spots."""
+    groups = [[i for i, (_, y) in enumerate(SPOTS_M) if (y > 0) == above] for above in (0, 1)]
+    rounds = [list(zip(rng.permutation(g), rng.permutation(g), strict=True)) for g in groups]
+    pairs: list[tuple[int, int]] = []
+    while len(pairs) < (count + 1) // 2:
+        for group in rounds:
+            if group and len(pairs) < (count + 1) // 2:
+                bob, toby = group.pop()
+                pairs.append((int(bob), int(toby)))
     return pairs
 
 
@@ -286,23 +289,22 @@ def swap(cell: Cell, cubes: list[Cube], *, quiet: bool) -> None:
     arms = {name: world.arm(name) for name in ("bob", "toby")}
     queues = {name: [c for c in cubes if c.arm == name] for name in arms}
     cell.run(*(cell.grip(arm, close=False) for arm in arms.values()))
-    carried: dict[str, tuple[Cube, np.ndarray]] = {}  # arm -> cube held over its spot
+    carried: dict[str, Cube] = {}  # arm -> the cube it holds over the cube's spot
     for rank in range(max(len(queue) for queue in queues.values()) + 1):
         batch = {name: queue[rank] for name, queue in queues.items() if rank < len(queue)}
         cell.run(*(cell.place_and_pick(arms[n], carried.get(n), batch.get(n)) for n in arms))
         if carried and not quiet:
             moved = ", ".join(
-                f"{c.name} {c.error_m(world) * 1000:.1f} mm" for c, _ in carried.values()
+                f"{c.name} {c.error_m(world) * 1000:.1f} mm" for c in carried.values()
             )
             print(f"t = {world.time:6.1f} s: {moved} from its target", flush=True)
-        carried = {name: (cube, cell.place_pose(arms[name], cube)) for name, cube in batch.items()}
-        if carried:
-            cell.run(
-                cell.together(
-                    {n: PoseGoal(lifted(pose), "world", "tcp") for n, (_, pose) in carried.items()}
-                )
-            )
-    cell.run(cell.together({name: arm.description.home for name, arm in arms.items()}))
+        carried = batch
+        over = {
+            n: cell.reach(arms[n], lifted(cell.place_pose(arms[n], c))) for n, c in batch.items()
+        }
+        if over:
+            cell.run(cell.planned(over))
+    cell.run(cell.planned({name: arm.description.home for name, arm in arms.items()}))
 
 
 @dataclass(frozen=True)
@@ -321,7 +323,7 @@ class Outcome:
     median_planning_ms: float
     simulated_s: float
     wall_s: float  # of the work, after the launch
-    gave_up: str = ""  # a motion that could not be planned in ATTEMPTS tries
+    gave_up: str = ""  # why the work stopped early (e.g. no plan in ATTEMPTS tries)
 
     @property
     def success(self) -> bool:
@@ -364,7 +366,7 @@ def work(
     gave_up = ""
     try:
         swap(Cell(world, tally, realtime=realtime), cubes, quiet=quiet)
-    except PlanningFailed as exc:
+    except armfleet.ArmfleetError as exc:  # PlanningFailed after ATTEMPTS, a stopped arm
         gave_up = str(exc)
     errors = [cube.error_m(world) for cube in cubes]
     return Outcome(
