@@ -50,9 +50,6 @@ ABOVE_M = 0.06  # approach and leave every cube from this high
 JITTER_M, JITTER_DEG = 0.005, 10.0  # random start of each cube around its spot
 TOLERANCE_M = 0.01  # a cube's centre ends this close to its spot (a quarter of its side)
 GRIP_S = 0.5  # time for the fingers to close or open
-#: Grasp force per finger [N] (the default 20 N let a cube turn in the fingers by 2 degrees
-#: in a fast crossing, and such a cube could skid when let go).
-GRASP_N = 60.0
 SETTLE_S = 0.1  # wait after a motion's planned duration
 POLL_S = 0.02  # how often a waiting arm looks again
 RETRY_S = 0.25  # wait before planning again when the other arm is in the way
@@ -189,7 +186,7 @@ class Cell:
 
     def grip(self, arm: armfleet.Arm, close: bool) -> Task:
         if close:
-            arm.gripper.close(GRASP_N)  # the fingers only move inwards: no wait
+            arm.gripper.close()  # the fingers only move inwards: no wait
         else:
             yield from self.still_others(arm)  # opening widens the hand
             arm.gripper.open()
