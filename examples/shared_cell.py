@@ -11,8 +11,9 @@ down with ``world.add_object`` (the spec's own four make way for them).
 
 Every motion between table positions is planned (``avoid_collisions``). Picks and
 places run in parallel: an arm plans while the other moves, and the planner checks the
-plan in time against the other arm's motion. The crossings are planned jointly
-(``world.move_together``), in the two arms' 14-joint space, because each arm's goal is
+plan in time against the other arm's motion. The crossings are planned jointly, in the
+two arms' 14-joint space (``world.plan`` then ``world.execute``, which is what
+``world.move_together(..., avoid_collisions=True)`` does), because each arm's goal is
 where the other arm is. The straight moves down to a cube and back up (MoveIt's
 approach and retreat; a plan keeps 1 cm from everything, so it cannot end with the
 fingers round a cube) and opening a gripper are not planned: an arm starts one only
@@ -42,8 +43,7 @@ MIDDLE_X_M = 0.45  # the table's middle line, between bob's half and toby's
 #: Cube spots on bob's half (x, y) [m]; toby's are these turned 180 degrees about the
 #: table's centre, as toby is bob turned. 11 cm apart across the fingers (open: 8 cm),
 #: clear of the post and the walls. None at y = +0.16: toby's forearm, reaching down
-#: there from its home posture's branch, comes within 1 cm of the post (and bob's at
-#: toby's y = -0.16).
+#: there from its home posture's branch, touches the post (and bob's at toby's -0.16).
 SPOTS_M = tuple((x, y) for x in (0.29, 0.37) for y in (-0.38, -0.27, -0.16, 0.27, 0.38))
 MAX_CUBES = 2 * len(SPOTS_M)
 ABOVE_M = 0.06  # approach and leave every cube from this high
@@ -223,8 +223,7 @@ class Cell:
         return pose
 
     def place(self, arm: armfleet.Arm, cube: Cube) -> Task:
-        """Set the held ``cube`` down on the table, resting (a cube let go above the table
-        can stay on the finger that opens last), and leave it."""
+        """Set the held ``cube`` down, resting on the table, and leave it."""
         pose = self.place_pose(arm, cube)  # again: the cube may have turned in the fingers
         yield from self.straight(arm, pose)
         yield from self.grip(arm, close=False)
