@@ -18,7 +18,7 @@ import numpy as np
 from armfleet.messages import FloatArray
 from armfleet.planning.path_check import PathCertifier
 from armfleet.planning.path_timing import TimedPath
-from armfleet.planning.scene import PlanningScene
+from armfleet.planning.scene import CollisionChecker, PlanningScene
 
 #: Time between the samples of the in-time check [s] (proven clear between them).
 SAMPLE_PERIOD_S = 0.02
@@ -70,17 +70,17 @@ class Conflict:
 
 
 def conflict_in_time(
-    scene: PlanningScene,
-    planned: Sequence[str],
+    checker: CollisionChecker,
     timed: TimedPath,
     delay_s: float,
     movers: Sequence[MovingArm],
 ) -> Conflict | None:
-    """The first meeting of the plan (started after ``delay_s``) with a moving arm, or None."""
+    """The first meeting of the plan (started after ``delay_s``) with a moving arm, or None.
+
+    ``checker`` checks the planned arms and the moving arms together, in that order."""
     if not movers:
         return None
-    arms = [*planned, *(m.name for m in movers)]
-    checker = scene.checker(arms)
+    scene = checker.scene
     horizon = max(delay_s + timed.duration, max(m.duration for m in movers))
     times = np.append(np.arange(0.0, horizon, SAMPLE_PERIOD_S), horizon)
     own = timed.at(times - delay_s)[0]
@@ -106,10 +106,11 @@ def find_start_delay(
     if not movers:
         return 0.0, None
     longest = max(m.duration for m in movers)
+    checker = scene.checker([*planned, *(m.name for m in movers)])
     conflict = None
     for fraction in DELAY_FRACTIONS:
         delay = fraction * longest
-        conflict = conflict_in_time(scene, planned, timed, delay, movers)
+        conflict = conflict_in_time(checker, timed, delay, movers)
         if conflict is None:
             return delay, None
     return 0.0, conflict
