@@ -43,7 +43,8 @@ if TYPE_CHECKING:
     from armfleet.arm import Arm
     from armfleet.objects import WorldObject
 
-#: Other IK solutions tried for a pose goal whose first solution is in collision.
+#: Rounds of other IK solutions (one per pose-goal arm, in turn) tried for a goal whose
+#: first solution is in collision.
 IK_ALTERNATIVES = 12
 #: Tool path points drawn per second of motion.
 TOOL_PATH_RATE_HZ = 50.0
@@ -194,15 +195,15 @@ class MotionPlanner:
             return state
         generator = np.random.default_rng(0)
         for _ in range(IK_ALTERNATIVES):
-            for index, (arm, goal) in pose_goals.items():
-                lower, upper = arm.joint_limits
+            for index, (arm, goal) in pose_goals.items():  # one arm at a time: the others
+                lower, upper = arm.joint_limits  # keep what they have found
                 try:
                     parts[index] = _solve_pose(arm, goal, generator.uniform(lower, upper))
                 except ArmfleetError:
                     continue
-            candidate = np.concatenate(parts)
-            if checker.valid(candidate):
-                return candidate
+                candidate = np.concatenate(parts)
+                if checker.valid(candidate):
+                    return candidate
         return state  # the nearest solution; the search names what it touches
 
     # -- the scene -----------------------------------------------------------------------------

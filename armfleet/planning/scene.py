@@ -166,6 +166,7 @@ class PlanningScene:
         self.model, self.geometry = model, geometry
         self._owners = owners
         self._held = {obj.name: obj.held_by for obj in objects if obj.held_by is not None}
+        self._checkers: dict[tuple[str, ...], CollisionChecker] = {}
         self._add_pairs()
         same_body = np.array(
             [owners[pair.first] == owners[pair.second] for pair in geometry.collisionPairs],
@@ -297,8 +298,18 @@ class PlanningScene:
     # -- checking --------------------------------------------------------------------------------
     def checker(self, arms: Sequence[str]) -> CollisionChecker:
         """A checker of configurations of ``arms``' controlled joints (concatenated in this
-        order), the rest of the scene where it is now."""
-        return CollisionChecker(self, arms)
+        order), the rest of the scene where it is now.
+
+        Checkers are kept per set of arms (building one costs milliseconds: two geometry
+        data and two broadphase trees); each call hands it the scene as it is now and
+        starts its count of checks afresh.
+        """
+        key = tuple(arms)
+        checker = self._checkers.get(key)
+        if checker is None:
+            checker = self._checkers[key] = CollisionChecker(self, arms)
+        checker.refresh()
+        return checker
 
     def moving_geometries(self, joints: Iterable[int]) -> npt.NDArray[np.bool_]:
         """Per geometry, whether it moves with any of the model joints ``joints``."""
@@ -351,6 +362,11 @@ class CollisionChecker:
         self._model_data = scene.model.createData()
         self._q = scene.positions.copy()
         #: How many states were checked.
+        self.checks = 0
+
+    def refresh(self) -> None:
+        """Take the scene's configuration for the joints not planned, and count anew."""
+        self._q[:] = self.scene.positions
         self.checks = 0
 
     def _data(self, margins: FloatArray) -> pin.GeometryData:
