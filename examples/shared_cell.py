@@ -54,6 +54,7 @@ SETTLE_S = 0.1  # wait after a motion's planned duration
 POLL_S = 0.02  # how often a waiting arm looks again
 RETRY_S = 0.25  # wait before planning again when the other arm is in the way
 ATTEMPTS = 40  # plans tried for one motion before giving up
+STEP_ASIDE_AFTER = 4  # refused plans after which a lone arm goes home first
 PLANNING_TIMEOUT_S = 2.0  # per plan
 DOWN = np.diag([1.0, -1.0, -1.0, 1.0])  # tcp z down, x along the frame's x
 COLOURS = ((0.85, 0.2, 0.2, 1.0), (0.2, 0.6, 0.85, 1.0))  # bob's cubes, toby's cubes
@@ -103,6 +104,7 @@ class Tally:
     arm_arm: int = 0  # new contacts between two arms
     arm_obstacle: int = 0  # new contacts of an arm with a static object or the floor
     replans: int = 0  # plans refused (the other arm in the way), then tried again
+    step_asides: int = 0  # times an arm went home to let the other one pass
     planning_ms: list[float] = field(default_factory=list)
     _touching: set[tuple[str, str]] = field(default_factory=set)
 
@@ -160,7 +162,11 @@ class Cell:
 
     def planned(self, goals: Mapping[str, np.ndarray | Sequence[float]]) -> Task:
         """Move the arms to ``goals`` (joint positions by arm name) around everything,
-        planned jointly when there are several; try again while another arm is in the way."""
+        planned jointly when there are several; try again while another arm is in the way.
+
+        One arm refused :data:`STEP_ASIDE_AFTER` times goes home first: two arms that
+        wait for each other (each one's goal where the other stands) would wait forever.
+        """
         for attempt in range(ATTEMPTS):
             try:
                 plan = self.world.plan(goals, timeout_s=PLANNING_TIMEOUT_S)
@@ -168,11 +174,25 @@ class Cell:
                 if attempt == ATTEMPTS - 1:
                     raise
                 self.tally.replans += 1
+                if attempt + 1 == STEP_ASIDE_AFTER and len(goals) == 1:
+                    yield from self.step_aside(self.world.arm(next(iter(goals))))
                 yield RETRY_S
                 continue
             self.tally.planning_ms.append(plan.planning_time_s * 1000)
             yield self.world.execute(plan) + SETTLE_S
             return
+
+    def step_aside(self, arm: armfleet.Arm) -> Task:
+        """Take ``arm`` home (planned), out of the other arm's way, if a plan is found."""
+        if np.allclose(arm.positions, arm.description.home, atol=1e-2):
+            return
+        try:
+            plan = self.world.plan({arm.name: arm.description.home}, timeout_s=PLANNING_TIMEOUT_S)
+        except PlanningFailed:
+            return
+        self.tally.step_asides += 1
+        self.tally.planning_ms.append(plan.planning_time_s * 1000)
+        yield self.world.execute(plan) + SETTLE_S
 
     def still_others(self, arm: armfleet.Arm) -> Task:
         """Wait until every other arm stands still."""
@@ -315,6 +335,7 @@ class Outcome:
     arm_obstacle_contacts: int
     stops: int
     replans: int
+    step_asides: int
     plans: int
     median_planning_ms: float
     simulated_s: float
@@ -338,7 +359,8 @@ class Outcome:
             f"contacts arm-arm: {self.arm_arm_contacts}, arm-obstacle: "
             f"{self.arm_obstacle_contacts}; protective stops: {self.stops}",
             f"plans: {self.plans} (median {self.median_planning_ms:.0f} ms), "
-            f"refused and tried again: {self.replans}",
+            f"refused and tried again: {self.replans}, arm went home to let the other "
+            f"pass: {self.step_asides}",
             f"simulated {self.simulated_s:.1f} s in {self.wall_s:.1f} s (seed {self.seed})",
         ]
         if self.gave_up:
@@ -374,6 +396,7 @@ def work(
         arm_obstacle_contacts=tally.arm_obstacle,
         stops=world.safety.stops,
         replans=tally.replans,
+        step_asides=tally.step_asides,
         plans=len(tally.planning_ms),
         median_planning_ms=float(np.median(tally.planning_ms)) if tally.planning_ms else 0.0,
         simulated_s=world.time,
