@@ -33,6 +33,9 @@ WALL_HALF_M = 0.02  # the walls and the post stand on the middle line, 4 cm thic
 #: A cube resting flat on the table has its centre this high, give or take 1 mm (PyBullet's
 #: contact penetration is well under that) and its top face up within 2 degrees.
 REST_Z_M, REST_Z_TOL_M, UPRIGHT_TOL_DEG = TABLE_TOP_M + CUBE_HALF_M, 1e-3, 2.0
+#: The cubes swap places: each ends on the spot a cube of the other half started from,
+#: within the example's start jitter (5 mm in x and y) and its 10 mm placing tolerance.
+SWAP_TOL_M = 0.005 * math.sqrt(2) + 0.010
 
 
 @pytest.fixture(scope="module")
@@ -96,6 +99,9 @@ def test_cubes_cross_to_the_other_half_without_arm_contacts(
         assert abs(z - REST_Z_M) < REST_Z_TOL_M, name
         up = world.tf.lookup("world", name)[:3, 2]
         assert math.degrees(math.acos(min(1.0, abs(up[2])))) < UPRIGHT_TOL_DEG, name
+        other_half = [p for p in start.values() if (p[0] - MIDDLE_X_M) * (x - MIDDLE_X_M) > 0]
+        gap_m = min(float(np.linalg.norm(p[:2] - (x, y))) for p in other_half)
+        assert gap_m < SWAP_TOL_M, (name, gap_m)  # on the spot a cube came from
     for a, b in itertools.combinations(start, 2):  # no two cubes in one place
         gap = np.abs(world.object(a).position[:2] - world.object(b).position[:2])
         assert gap.max() > 2 * CUBE_HALF_M, (a, b)
