@@ -38,6 +38,7 @@ from armfleet.messages import (
     PlannedMotion,
     Positions,
 )
+from armfleet.planning.motion_planner import PoseGoal
 from armfleet.planning.move_options import MoveOptions
 from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 from armfleet.robot_state_publisher import RobotStatePublisher
@@ -333,8 +334,6 @@ class Arm:
             ArmInMotion, ArmFault, ProtectiveStopError, and the target errors of
             :meth:`move_to` and :meth:`solve_ik`.
         """
-        from armfleet.planning import PoseGoal
-
         goal = PoseGoal(target, frame, link) if is_pose(target) else target
         return self._world_planner().plan(
             {self._name: goal}, clearance_m=clearance_m, timeout_s=timeout_s

@@ -288,13 +288,9 @@ class World:
             raise ArmfleetError(
                 f"plan takes a mapping {{arm name: target}}, got {type(targets).__name__}"
             )
-        goals = {name: self._goal(name, target) for name, target in targets.items()}
+        # A 4x4 is tool0 in the world, as move_together takes it.
+        goals = {name: PoseGoal(t) if is_pose(t) else t for name, t in targets.items()}
         return self._planner.plan(goals, clearance_m=clearance_m, timeout_s=timeout_s)
-
-    def _goal(self, name: str, target: Any) -> Any:
-        if is_pose(target):
-            return PoseGoal(target)
-        return target
 
     def execute(self, plan: Plan) -> float:
         """Start ``plan`` on its arms, all on the next step; returns its duration [s].
