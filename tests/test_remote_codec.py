@@ -22,6 +22,7 @@ from armfleet.messages import (
     GripperState,
     JointCommand,
     JointState,
+    PlannedMotion,
     TFMessage,
     TransformStamped,
 )
@@ -57,6 +58,13 @@ SAMPLES = [
     ArmStatus(4.0, "bob", ArmMode.PROTECTIVE_STOP, "touched toby", (0, 3)),
     GripperCommand(0.04, False, 20.0),
     GripperState(5.0, 0.0395, 0.04, 12.5, GripperMode.SQUEEZING, True),
+    PlannedMotion(
+        2.5,
+        ("bob_panda_joint1", "bob_panda_joint2"),
+        (0.0, 0.8, 1.9),
+        np.array([[0.0, 0.1], [0.5, -0.2], [1.0, 0.3]]),
+        np.array([[0.3, 0.0, 0.5], [0.35, 0.1, 0.45], [0.4, 0.2, 0.4]]),
+    ),
 ]
 
 
