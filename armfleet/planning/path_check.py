@@ -84,24 +84,31 @@ class PathCertifier:
     def first_failure(self, path: FloatArray) -> tuple[int, FloatArray] | None:
         """The first (segment index, state) of ``path`` that is not clear, or None.
 
-        The waypoints themselves are checked too (the first one included)."""
+        The waypoints themselves are checked too (the first one included). Each state is
+        checked once: far first; a state that is not far is checked against the clearance
+        (and fails the path if it is not clear), and so are the states inside a step with
+        such an end.
+        """
         checker = self._checker
-        if not checker.valid(path[0]):
+        far_before = checker.far(path[0])
+        if not far_before and not checker.valid(path[0]):
             return 0, path[0]
         for index in range(len(path) - 1):
             start, end = path[index], path[index + 1]
             count = self.steps(start, end, far=True)
             grid = start + np.linspace(0.0, 1.0, count + 1)[:, None] * (end - start)
-            far = [checker.far(state) for state in grid]
             for k in range(count):
-                if far[k] and far[k + 1]:
-                    continue  # both ends far from everything: this step is proven
                 a, b = grid[k], grid[k + 1]
-                fine = self.steps(a, b)
-                for s in np.arange(0, fine + 1) / fine:
-                    state = a + s * (b - a)
-                    if not checker.valid(state):
-                        return index, state
+                far_after = checker.far(b)
+                if not far_after and not checker.valid(b):
+                    return index, b
+                if not (far_before and far_after):  # near something: the clearance's steps
+                    fine = self.steps(a, b)
+                    for s in np.arange(1, fine) / fine:
+                        state = a + s * (b - a)
+                        if not checker.valid(state):
+                            return index, state
+                far_before = far_after
         return None
 
     def clear(self, start: FloatArray, end: FloatArray) -> bool:
