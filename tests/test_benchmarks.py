@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
@@ -52,6 +54,7 @@ def test_ik_benchmark_short_mode_reports_every_model(tmp_path: Path) -> None:
 
 
 def test_planner_choice_short_mode_compares_both_libraries(tmp_path: Path) -> None:
+    pytest.importorskip("roboplan", reason="the comparison needs the bench extra (roboplan)")
     out = tmp_path / "planner_choice.json"
     result = subprocess.run(
         [sys.executable, str(BENCHMARKS / "planner_choice.py"), "--short", "--json", str(out)],
