@@ -13,7 +13,7 @@ outlived the interpreter would be reported as a leak by nanobind at exit.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from ompl import base as ob
@@ -50,7 +50,6 @@ class SearchResult:
     samples: int
     search_s: float
     simplify_s: float = 0.0
-    notes: list[str] = field(default_factory=list)
 
 
 class OmplRrtConnect:

@@ -110,7 +110,3 @@ class PathCertifier:
                             return index, state
                 far_before = far_after
         return None
-
-    def clear(self, start: FloatArray, end: FloatArray) -> bool:
-        """Whether the straight line ``start`` -> ``end`` is proven contact-free."""
-        return self.first_failure(np.array([start, end])) is None

@@ -46,19 +46,6 @@ class PlanningProblem:
     def clearance_m(self) -> float:
         return self.checker.scene.clearance_m
 
-    def arm_slices(self) -> dict[str, slice]:
-        """Where each arm's joints are in a state."""
-        slices, offset = {}, 0
-        for arm in self.arms:
-            size = int(self.checker.scene.columns(arm).size)
-            slices[arm] = slice(offset, offset + size)
-            offset += size
-        return slices
-
-    def straight_length(self) -> float:
-        """Joint-space length of the straight line start -> goal [rad]."""
-        return float(np.linalg.norm(self.goal - self.start))
-
     def __repr__(self) -> str:
         return (
             f"PlanningProblem(arms={self.arms}, start={np.round(self.start, 4).tolist()}, "

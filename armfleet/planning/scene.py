@@ -376,10 +376,6 @@ class CollisionChecker:
             data.activeCollisionPairs[index] = bool(active)
         return data
 
-    @property
-    def dimension(self) -> int:
-        return int(self.columns.size)
-
     def valid(self, state: FloatArray) -> bool:
         """Whether the planned joints at ``state`` keep the clearance from everything."""
         self.checks += 1
