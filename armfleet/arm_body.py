@@ -3,6 +3,10 @@
 This is the arm's hardware interface in ros2_control terms: ``read()`` fills
 the state (positions, velocities), controllers fill ``effort_command``, and
 ``write()`` sends it to the physics engine in torque mode.
+
+The body is the description's lean URDF (:mod:`armfleet.simulated_body.lean_urdf`):
+its landmark links (``world``, ``base_link``, ``tool0`` ...) are not PyBullet links,
+and its first link with mass or a collision shape is the base, link index -1.
 """
 
 from __future__ import annotations
@@ -12,11 +16,13 @@ import tempfile
 from collections.abc import Sequence
 
 import numpy as np
+import pinocchio as pin
 import pybullet as p
 
 from armfleet.errors import DescriptionError
 from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
+from armfleet.simulated_body.lean_urdf import lean_urdf
 
 #: Load flags: inertias from the file (so PyBullet and Pinocchio dynamics
 #: agree, with Bullet's link damping off: see link_damping.py) and no visual
@@ -35,27 +41,35 @@ class ArmBody:
 
     Args:
         client: PyBullet physics client id of the world.
-        urdf: URDF text (absolute mesh paths), loaded at the world origin; its
-            ``world`` joint carries the spawn pose.
+        urdf: URDF text (absolute mesh paths) rooted at the world; its ``world``
+            joint carries the spawn pose. Its lean form is loaded.
         joint_names: movable joints, in the order of every array here.
     """
 
     def __init__(self, client: int, urdf: str, joint_names: Sequence[str]) -> None:
         self._client = client
+        lean = lean_urdf(urdf)
+        #: The base (link index -1): the description's first link with mass or a shape.
+        self.base_link = lean.base_link
         fd, path = tempfile.mkstemp(suffix=".urdf", prefix="armfleet-")
         try:
             with os.fdopen(fd, "w") as file:
-                file.write(urdf)
+                file.write(lean.text)
             self.body_id = p.loadURDF(
-                path, useFixedBase=True, flags=LOAD_FLAGS, physicsClientId=client
+                path,
+                basePosition=lean.base_pose[:3, 3].tolist(),
+                baseOrientation=_quaternion(lean.base_pose),
+                useFixedBase=True,
+                flags=LOAD_FLAGS,
+                physicsClientId=client,
             )
         except p.error as exc:
             raise DescriptionError(f"PyBullet cannot load the URDF: {exc}") from exc
         finally:
             os.unlink(path)
         disable_link_damping(self.body_id, client)
-        self._link_index: dict[str, int] = {}
-        #: Per link index: (parent link index, whether its joint moves).
+        self._link_index: dict[str, int] = {lean.base_link: -1}
+        #: Per link index but the base's: (parent link index, whether its joint moves).
         self.link_parents: dict[int, tuple[int, bool]] = {}
         joint_index: dict[str, int] = {}
         for index in range(p.getNumJoints(self.body_id, physicsClientId=client)):
@@ -92,6 +106,7 @@ class ArmBody:
 
     @property
     def link_names(self) -> tuple[str, ...]:
+        """The links PyBullet simulates, the base first (no landmark links)."""
         return tuple(self._link_index)
 
     def link_index(self, link: str) -> int:
@@ -147,13 +162,17 @@ class ArmBody:
     def link_world_pose(self, link: str) -> FloatArray:
         """4x4 world pose of ``link``'s URDF frame, as PyBullet sees it."""
         index = self._link_index[link]
+        if index == -1:  # PyBullet gives the base's inertial frame: undo its offset
+            position, orientation = p.getBasePositionAndOrientation(
+                self.body_id, physicsClientId=self._client
+            )
+            info = p.getDynamicsInfo(self.body_id, -1, physicsClientId=self._client)
+            inertial = _matrix(info[3], info[4])
+            return _matrix(position, orientation) @ np.linalg.inv(inertial)
         state = p.getLinkState(
             self.body_id, index, computeForwardKinematics=True, physicsClientId=self._client
         )
-        matrix = np.eye(4)
-        matrix[:3, :3] = np.reshape(p.getMatrixFromQuaternion(state[5]), (3, 3))
-        matrix[:3, 3] = state[4]
-        return matrix
+        return _matrix(state[4], state[5])
 
     def set_friction(self, link_index: int, lateral: float, spinning: float) -> None:
         """Friction coefficients of link ``link_index`` (Bullet multiplies those of a pair)."""
@@ -174,3 +193,17 @@ class ArmBody:
 
     def remove(self) -> None:
         p.removeBody(self.body_id, physicsClientId=self._client)
+
+
+def _matrix(position: Sequence[float], quaternion: Sequence[float]) -> FloatArray:
+    """4x4 pose from a position and a PyBullet quaternion (x, y, z, w)."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = np.reshape(p.getMatrixFromQuaternion(quaternion), (3, 3))
+    matrix[:3, 3] = position
+    return matrix
+
+
+def _quaternion(pose: FloatArray) -> list[float]:
+    """PyBullet quaternion (x, y, z, w) of a 4x4 pose's rotation."""
+    x, y, z, w = pin.Quaternion(pose[:3, :3]).coeffs()
+    return [float(x), float(y), float(z), float(w)]

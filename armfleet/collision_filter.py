@@ -20,10 +20,11 @@ def rigid_groups(body: ArmBody) -> dict[int, int]:
 
 
 def solid_links(client: int, body: ArmBody) -> list[int]:
-    """Link indices of ``body`` that have a collision shape (the others touch nothing)."""
+    """Link indices of ``body`` that have a collision shape (the others touch nothing),
+    the base (-1) included."""
     return [
         link
-        for link in sorted(body.link_parents)
+        for link in [-1, *sorted(body.link_parents)]
         if p.getCollisionShapeData(body.body_id, link, physicsClientId=client)
     ]
 
@@ -70,7 +71,7 @@ def filter_collisions(
     the :func:`ignored_self_pairs`, and the floor against the :func:`fixed_links`
     (the base stands on it)."""
     for a, b in ignored_self_pairs(client, body, ignored_pairs):
-        if body.link_parents[a][0] == b or body.link_parents[b][0] == a:
+        if body.link_parents[b][0] == a:  # a < b: only b can be a's child
             continue  # a link and its parent: ArmBody's load flags leave them out already
         p.setCollisionFilterPair(body.body_id, body.body_id, a, b, 0, physicsClientId=client)
     fixed = fixed_links(body)
