@@ -52,9 +52,11 @@ def test_an_object_named_like_a_future_arms_flange_keeps_its_frame(
     # Once the object is gone, its frame is free: carol comes up and owns its flange.
     world.remove_object("carol_tool0")
     carol = world.spawn("carol", at=(0, 0))
+    # tool0 is a landmark, not a PyBullet link: PyBullet's hand and the fixed hand -> tool0.
+    hand = carol.body.link_world_pose("carol_panda_hand")
     np.testing.assert_allclose(
         world.tf.lookup("world", "carol_tool0"),
-        carol.body.link_world_pose("carol_tool0"),
+        hand @ carol.kinematics.relative_pose("carol_panda_hand", "carol_tool0"),
         atol=1e-6,  # Pinocchio's model vs PyBullet's measured state, a settled arm
     )
 

@@ -100,6 +100,28 @@ def test_contact_with_the_floor_stops_the_arm() -> None:
         assert np.abs(arm.positions - target).max() > 0.1  # it did not go through
 
 
+def test_folding_the_wrist_into_the_forearm_stops_the_arm() -> None:
+    """A Panda's wrist (link7) driven into its forearm (link5) by the wrist joint alone.
+
+    The upstream SRDF disables link5-link7, so before the sampled contact pairs
+    (armfleet/simulated_body/contact_pairs.py) this self-contact raised no stop and the
+    wrist pushed 9 mm into the forearm at the joint's limit."""
+    with armfleet.World() as world:
+        arm = world.spawn("bob")
+        contacts: list[CollisionReport] = []
+        world.bus.subscribe("/collisions", contacts.append)
+        target = arm.positions.copy()
+        target[5] = arm.joint_limits[0][5] + 0.01  # joint 6 to its lower limit: folded
+        arm.move_to(target)
+        world.run(3.0)
+        status = arm.status(world.time)
+        assert status.mode is ArmMode.PROTECTIVE_STOP
+        assert "bob_panda_link5" in status.reason and "bob_panda_link7" in status.reason
+        assert np.abs(arm.positions - target).max() > 0.05  # it stopped on the way
+        deepest = max(c.depth for report in contacts for c in report.contacts)
+        assert deepest < MAX_INTERPENETRATION_M
+
+
 def test_a_new_contact_after_reset_stops_again(facing: armfleet.World) -> None:
     bob, toby = facing.arm("bob"), facing.arm("toby")
     bob.move_to(lean_forward(bob))

@@ -17,15 +17,15 @@ from xml.dom import minidom
 import xacro
 
 from armfleet.description.resource_resolver import ResourceResolver
-from armfleet.description.srdf import disabled_collision_pairs
 from armfleet.description.upstream_macro import XACRO_NS, prefixable_macro
 from armfleet.errors import DescriptionError, UnknownModel
 from armfleet.paths import data_dir
+from armfleet.simulated_body.contact_pairs import solid_link_pairs, touching_pairs
+from armfleet.simulated_body.lean_urdf import lean_urdf
 from armfleet.spawn_pose import SpawnPose
 
 XACRO_SUFFIX = ".urdf.xacro"
 UPSTREAM_PROPERTY = "armfleet_upstream_urdf"
-SRDF_PROPERTY = "armfleet_upstream_srdf"
 HOME_PROPERTY = "armfleet_home"
 
 
@@ -38,8 +38,9 @@ class ArmDescription:
         prefix: prefix of every link and joint, e.g. ``"bob_"``.
         urdf: URDF text with absolute mesh paths.
         home: home positions of the arm joints in chain order [rad or m].
-        ignored_contacts: link pairs whose contacts don't count (from the upstream
-            SRDF's ``<disable_collisions>``; empty without one).
+        ignored_contacts: link pairs whose contacts don't count: pairs of links with
+            a collision shape never seen touching in random configurations
+            (:mod:`armfleet.simulated_body.contact_pairs`).
     """
 
     model: str
@@ -120,14 +121,10 @@ class ModelLibrary:
         text, properties = self._expand_directly(model, PREFIX_TOKEN, (XYZ_TOKEN, RPY_TOKEN))
         path = self.path(model)
         home = _parse_home(path, properties.get(HOME_PROPERTY, ""))
-        ignored: tuple[tuple[str, str], ...] = ()
-        if SRDF_PROPERTY in properties:
-            srdf = self._resolver.resolve(properties[SRDF_PROPERTY])
-            ignored = disabled_collision_pairs(srdf.read_text(), "", str(srdf))
         probe_pose = SpawnPose(0.25, -0.5, 0.125, 30.0, roll_deg=5.0)
-        probe, _ = self._expand_directly(model, "probe_", _pose_arguments(probe_pose))
-        usable = _instantiate(text, "probe_", probe_pose) == probe
-        return _Template(text if usable else None, home, ignored)
+        probe, _ = self._expand_directly(model, PROBE_PREFIX, _pose_arguments(probe_pose))
+        usable = _instantiate(text, PROBE_PREFIX, probe_pose) == probe
+        return _Template(text if usable else None, home, _never_touching(probe))
 
     def _expand_directly(
         self, model: str, prefix: str, pose_arguments: tuple[str, str]
@@ -167,6 +164,8 @@ class ModelLibrary:
         return self._macros[uri]
 
 
+#: Prefix of the arm expanded once per model to check the template and sample contacts.
+PROBE_PREFIX = "probe_"
 #: Placeholders xacro is run with once per model; each arm's values replace them.
 PREFIX_TOKEN = "armfleetprefixtoken_"
 XYZ_TOKEN = "armfleet-xyz-token"
@@ -180,6 +179,14 @@ class _Template:
     text: str | None
     home: tuple[float, ...]
     ignored_contacts: tuple[tuple[str, str], ...]
+
+
+def _never_touching(probe_urdf: str) -> tuple[tuple[str, str], ...]:
+    """Unprefixed pairs of links with a collision shape that no sampled configuration of
+    the probe arm brings into contact (see :mod:`armfleet.simulated_body.contact_pairs`)."""
+    touching = touching_pairs(lean_urdf(probe_urdf))
+    never = sorted(solid_link_pairs(probe_urdf) - touching)
+    return tuple((a.removeprefix(PROBE_PREFIX), b.removeprefix(PROBE_PREFIX)) for a, b in never)
 
 
 def _pose_arguments(pose: SpawnPose) -> tuple[str, str]:
