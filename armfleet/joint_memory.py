@@ -44,6 +44,11 @@ class Row(enum.IntEnum):
     TORQUE = 12
     CLIPPED_TORQUE = 13
     SCRATCH = 14
+    # The gripper controller's reference and force, in its fingers' columns.
+    FINGER_REFERENCE_POSITION = 15
+    FINGER_REFERENCE_VELOCITY = 16
+    FINGER_REFERENCE_ACCELERATION = 17
+    FINGER_FORCE = 18
 
 
 @dataclass(frozen=True)
@@ -54,11 +59,15 @@ class JointViews:
         columns: the arm's columns in the block.
         rows: the arm's part of each :class:`Row` (index with ``Row.X``).
         saturation_steps: the arm's part of the per-joint count of clipped torques.
+        finger_blocked: per joint, whether a closing finger is blocked by something.
+        finger_grasping: per joint, whether its finger is closing with a force.
     """
 
     columns: slice
     rows: FloatArray
     saturation_steps: npt.NDArray[np.int64]
+    finger_blocked: npt.NDArray[np.bool_]
+    finger_grasping: npt.NDArray[np.bool_]
 
     def row(self, row: Row) -> FloatArray:
         view: FloatArray = self.rows[row]
@@ -78,6 +87,8 @@ class JointMemory:
         self.rows: tuple[FloatArray, ...] = tuple(self.block)
         self.saturation_steps: npt.NDArray[np.int64] = np.zeros(0, dtype=np.int64)
         self.saturated: npt.NDArray[np.bool_] = np.zeros(0, dtype=bool)
+        self.finger_blocked: npt.NDArray[np.bool_] = np.zeros(0, dtype=bool)
+        self.finger_grasping: npt.NDArray[np.bool_] = np.zeros(0, dtype=bool)
         #: The bodies whose joints the block holds, with their first and end column.
         self._bodies: list[tuple[ArmBody, int, int]] = []
 
@@ -99,12 +110,20 @@ class JointMemory:
         self.rows = tuple(self.block[row] for row in Row)
         self.saturation_steps = np.zeros(total, dtype=np.int64)
         self.saturated = np.zeros(total, dtype=bool)
+        self.finger_blocked = np.zeros(total, dtype=bool)
+        self.finger_grasping = np.zeros(total, dtype=bool)
         views = []
         start = 0
         for size in sizes:
             columns = slice(start, start + size)
             views.append(
-                JointViews(columns, self.block[:, columns], self.saturation_steps[columns])
+                JointViews(
+                    columns,
+                    self.block[:, columns],
+                    self.saturation_steps[columns],
+                    self.finger_blocked[columns],
+                    self.finger_grasping[columns],
+                )
             )
             start += size
         return views

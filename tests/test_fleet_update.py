@@ -4,16 +4,23 @@ in test_control_law.py)."""
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 
 import armfleet
 from armfleet.controllers import fleet_update
 from armfleet.controllers.position_controller import PositionController
+from armfleet.messages import ArmMode
 
-ARMS = (("bob", "panda", (0.0, 0.0)), ("toby", "panda", (1.0, 0.0)), ("ursula", "ur5", (0.0, 1.0)))
-#: Each arm its own gains, so a mix-up of per-arm parameters would show.
-GAINS = {"bob": (2500.0, 100.0), "toby": (900.0, 60.0), "ursula": (1600.0, 80.0)}
+#: 30 arms on a 1 m grid: Pandas (with grippers) and, in every tenth place, a UR5 (none).
+ARMS = tuple(
+    (f"arm{i}", "ur5" if i % 10 == 9 else "panda", (float(i // 6), float(i % 6))) for i in range(30)
+)
+STEPS = 1500
+#: The UR5 that swings through the floor and stops (a protective stop mid-run).
+FALLING = "arm19"
 
 
 Trace = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
@@ -23,44 +30,70 @@ def scripted_run(slow_arm: str | None = None) -> Trace:
     """Every arm's efforts and positions at each step of one scripted scene, and the
     saturation counts at its end.
 
-    The scene moves every arm with random targets, closes and opens bob's gripper, and
-    pushes one arm (bob) into a joint-torque limit so clipping and saturation count.
+    Every arm has its own gains (a mix-up of per-arm parameters would show) and takes
+    random targets every 300 steps. arm0 closes on a box and squeezes it (the
+    coupled-finger law) while it moves, other Pandas close on nothing and open again,
+    arm1 is pulled into a joint-torque limit (clipping, saturation count), and arm19
+    swings into the floor: a protective stop.
     """
     rng = np.random.default_rng(11)
     with armfleet.World() as world:
-        for name, model, at in ARMS:
-            kp, kd = GAINS[name]
-            controller: dict[str, float] = {"kp_s2": kp, "kd_s": kd}
+        for index, (name, model, at) in enumerate(ARMS):
+            controller: dict[str, float] = {"kp_s2": 900.0 + 50 * index, "kd_s": 60.0 + index}
             if name == slow_arm:
                 controller["update_rate_hz"] = 500.0
             world.spawn(name, model=model, at=at, parameters={"position_controller": controller})
+        put_box_between_fingers(world, "arm0")
         arms = list(world.arms.values())
-        bob = world.arm("bob")
-        assert bob.gripper is not None
         efforts, positions = [], []
-        for step in range(1500):
-            if step % 300 == 0:
+        for step in range(STEPS):
+            if step % 300 == 150:
                 for arm in arms:
+                    if arm.name in ("arm0", FALLING):
+                        continue  # arm0 holds its box still; arm19 is falling
                     lower, upper = arm.joint_limits
                     home = np.array(arm.description.home)
-                    arm.move_to(np.clip(home + rng.uniform(-0.5, 0.5, home.size), lower, upper))
-            if step == 200:
-                bob.gripper.close(force=10.0)
-            if step == 700:
-                bob.gripper.open()
+                    target = np.clip(home + rng.uniform(-0.4, 0.4, home.size), lower, upper)
+                    with contextlib.suppress(armfleet.ArmfleetError):  # e.g. in a stop
+                        arm.move_to(target)
+            if step == 10:
+                world.arm("arm0").gripper.close(force=10.0)
+                target = world.arm(FALLING).positions.copy()
+                target[1] += 2.4  # swing the upright UR5 down through the floor
+                world.arm(FALLING).move_to(target)
+            if step % 400 == 100:
+                for arm in arms[2::5]:
+                    if arm.gripper_controller is not None:
+                        arm.gripper.close(force=5.0)
+            if step % 400 == 300:
+                for arm in arms[2::5]:
+                    if arm.gripper_controller is not None:
+                        arm.gripper.open()
             if step == 1000:  # a sudden pull on one joint: the torques clip
-                bob.position_controller.trajectory.position[1] += 0.3  # type: ignore[union-attr]
+                trajectory = world.arm("arm1").position_controller.trajectory
+                trajectory.position[1] += 0.3  # type: ignore[union-attr]
             world.step()
             efforts.append(np.concatenate([arm.body.effort_command for arm in arms]))
             positions.append(np.concatenate([arm.body.position for arm in arms]))
         saturation = np.concatenate([arm.position_controller.saturation_steps for arm in arms])
+        assert world.arm("arm0").gripper.holding  # the squeeze branch ran
+        assert world.arm(FALLING).status(world.time).mode is ArmMode.PROTECTIVE_STOP
     assert saturation.sum() > 0  # the pull did clip
     return efforts, positions, saturation
 
 
+def put_box_between_fingers(world: armfleet.World, arm: str) -> None:
+    """A 3 cm box on a static pedestal, centred between ``arm``'s open finger pads."""
+    tcp = world.tf.lookup("world", f"{arm}_panda_hand_tcp")[:3, 3]
+    side = 0.03
+    top = tcp[2] - side / 2
+    world.add_object("pedestal", "box", size=(0.08, 0.08, top), mass=0.0, at=(*tcp[:2], top / 2))
+    world.add_object("box", "box", size=(side,) * 3, mass=0.2, at=(*tcp[:2], top + side / 2))
+
+
 def each_arm_on_its_own(monkeypatch: pytest.MonkeyPatch) -> None:
     """From now on every arm is updated by its own controller manager (no fleet path)."""
-    monkeypatch.setattr(fleet_update, "_fleet_arm", lambda arm: None)
+    monkeypatch.setattr(fleet_update, "_fleet_arm", lambda arm, memory: None)
 
 
 def assert_identical(fleet: Trace, plain: Trace) -> None:
@@ -84,9 +117,9 @@ def test_an_arm_at_another_rate_beside_the_fleet_path_changes_nothing(
 ) -> None:
     """One arm at 500 Hz takes its own path while the others take the fleet path: the
     fleet-wide operations must leave its efforts alone."""
-    mixed = scripted_run(slow_arm="toby")
+    mixed = scripted_run(slow_arm="arm7")
     each_arm_on_its_own(monkeypatch)
-    assert_identical(mixed, scripted_run(slow_arm="toby"))
+    assert_identical(mixed, scripted_run(slow_arm="arm7"))
 
 
 def test_standard_arms_take_the_fleet_path(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -10,7 +10,8 @@ rate, takes the fleet path:
    the joint memory (one world, one physics step: one half-step lead for all),
    RNEA per arm, then damping, clipping and the saturation count in one pass;
    then each arm's state message and Ruckig step;
-3. grippers, arm by arm;
+3. grippers: the finger law of every gripper in one pass (fleet_grippers.py), then
+   each gripper's state message and reference step;
 4. one finiteness check of every effort.
 
 Every other arm (being brought up, in error, running a controller at a slower
@@ -25,12 +26,14 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
+import pinocchio as pin
 
 from armfleet.controllers.controller_manager import ControllerManager
+from armfleet.controllers.fleet_grippers import FleetGrippers
 from armfleet.controllers.gripper_controller import GripperController
 from armfleet.controllers.joint_state_broadcaster import JointStateBroadcaster
 from armfleet.controllers.position_controller import (
@@ -39,6 +42,7 @@ from armfleet.controllers.position_controller import (
     feedback_acceleration,
 )
 from armfleet.joint_memory import JointMemory, Row
+from armfleet.messages import FloatArray
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
@@ -52,13 +56,20 @@ FLEET_CONTROLLER_SETS = (
 
 @dataclass(frozen=True)
 class _FleetArm:
-    """An arm on the fleet path: its manager, controllers and columns of the memory."""
+    """An arm on the fleet path: its manager, controllers and columns of the memory.
+
+    Attributes:
+        dynamics: its Pinocchio model and data, and views of its columns of the
+            position, velocity, acceleration and torque rows (RNEA's arguments, made
+            once per lay-out: slicing the rows at every step costs more than RNEA's call).
+    """
 
     manager: ControllerManager
     broadcaster: JointStateBroadcaster
     controller: PositionController
     gripper: GripperController | None
     columns: slice
+    dynamics: tuple[Any, Any, FloatArray, FloatArray, FloatArray, FloatArray]
 
 
 @dataclass(frozen=True)
@@ -74,6 +85,8 @@ class _Plan:
     everyone: bool
     #: The controllers' half physics step [s] (one world, one step; 0 with no fleet).
     half_step_s: float
+    #: The fleet arms' grippers whose state is in the memory, updated in one pass.
+    grippers: FleetGrippers | None
 
 
 class FleetUpdate:
@@ -100,6 +113,8 @@ class FleetUpdate:
                 view.row(Row.POSITION), view.row(Row.VELOCITY), view.row(Row.EFFORT_COMMAND)
             )
             arm.position_controller.bind(view)
+            if arm.gripper_controller is not None:
+                arm.gripper_controller.bind(view)
         memory.attach([arm.body for arm in self._arms], views)
         self._managers = tuple(arm.controller_manager for arm in self._arms)
         self._plan = None
@@ -123,20 +138,26 @@ class FleetUpdate:
         others: list[ControllerManager] = []
         mask = np.zeros(self._memory.size, dtype=bool)
         for arm in self._arms:
-            entry = _fleet_arm(arm)
+            entry = _fleet_arm(arm, self._memory)
             if entry is None:
                 others.append(arm.controller_manager)
             else:
                 fleet.append(entry)
                 mask[entry.columns] = True
         half_step_s = fleet[0].controller.half_step_s if fleet else 0.0
-        return _Plan(key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s)
+        ready = [
+            arm.gripper for arm in fleet if arm.gripper is not None and arm.gripper.fleet_ready
+        ]
+        grippers = FleetGrippers(self._memory, ready) if ready else None
+        return _Plan(
+            key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s, grippers
+        )
 
     def _update_fleet(self, plan: _Plan, stamp: float) -> None:
         memory = self._memory
         rows = memory.rows
         q, v, effort = rows[Row.POSITION], rows[Row.VELOCITY], rows[Row.EFFORT_COMMAND]
-        acceleration, torque = rows[Row.ACCELERATION], rows[Row.TORQUE]
+        acceleration = rows[Row.ACCELERATION]
         failed: list[tuple[_FleetArm, Exception]] = []
         # 1. Broadcasters: the state and efforts as they are before this update.
         sample = memory.block[Row.POSITION : Row.EFFORT_COMMAND + 1].copy()
@@ -158,12 +179,12 @@ class FleetUpdate:
             half_step_s=plan.half_step_s, out=acceleration, scratch=rows[Row.SCRATCH],
         )  # fmt: skip
         torqued: list[_FleetArm] = []
+        rnea = pin.rnea
         for arm in alive:
-            columns = arm.columns
+            model, data, q_arm, v_arm, acceleration_arm, torque_arm = arm.dynamics
             try:
-                torque[columns] = arm.controller.arm.kinematics.rnea(
-                    q[columns], v[columns], acceleration[columns]
-                )
+                # What ArmKinematics.rnea computes, on the arm's views of the rows.
+                torque_arm[:] = rnea(model, data, q_arm, v_arm, acceleration_arm)
             except Exception as error:  # its torques are not written; faulted below
                 failed.append((arm, error))
             else:
@@ -180,16 +201,36 @@ class FleetUpdate:
         for arm, cause in failed:  # after the torques: a fault zeroes the arm's efforts
             arm.manager.fail_controller(arm.controller, cause)
         # 3. Grippers.
-        for arm in moving:
-            if arm.gripper is not None:
-                try:
-                    arm.gripper.update(stamp)
-                except Exception as exc:
-                    arm.manager.fail_controller(arm.gripper, exc)
+        self._update_grippers(plan, moving, stamp)
         # 4. Finite efforts (a dot product is NaN or inf whenever an element is).
         if not math.isfinite(effort.dot(effort)):
             for arm in plan.fleet:
                 arm.manager.check_efforts()
+
+    def _update_grippers(self, plan: _Plan, moving: list[_FleetArm], stamp: float) -> None:
+        """Every moving arm's gripper: in one pass when all arms moved on, else one by one."""
+        together = plan.grippers
+        own = [arm for arm in moving if arm.gripper is not None]
+        if together is not None and len(moving) == len(plan.fleet):
+            try:
+                together.write_efforts()
+            except Exception:  # can't tell whose: each on its own, as its manager would
+                together = None
+            else:
+                own = [arm for arm in own if arm.gripper not in together.grippers]
+                for arm in moving:
+                    gripper = arm.gripper
+                    if gripper is not None and gripper in together.grippers:
+                        try:
+                            gripper.finish_update(stamp)
+                        except Exception as exc:
+                            arm.manager.fail_controller(gripper, exc)
+        for arm in own:
+            assert arm.gripper is not None
+            try:
+                arm.gripper.update(stamp)
+            except Exception as exc:
+                arm.manager.fail_controller(arm.gripper, exc)
 
     def _write_torques(self, plan: _Plan, arms: list[_FleetArm]) -> None:
         """Damping, clipping and saturation count of ``arms`` (their RNEA torques are in)."""
@@ -214,7 +255,7 @@ class FleetUpdate:
         memory.saturation_steps += memory.saturated
 
 
-def _fleet_arm(arm: Arm) -> _FleetArm | None:
+def _fleet_arm(arm: Arm, memory: JointMemory) -> _FleetArm | None:
     """``arm`` as a fleet-path arm, or None if its own manager must update it."""
     manager, controller = arm.controller_manager, arm.position_controller
     running = manager.running
@@ -229,4 +270,15 @@ def _fleet_arm(arm: Arm) -> _FleetArm | None:
     gripper = running[2] if len(running) == 3 else None
     assert isinstance(running[0], JointStateBroadcaster)
     assert gripper is None or isinstance(gripper, GripperController)
-    return _FleetArm(manager, running[0], controller, gripper, controller.memory_columns)
+    columns = controller.memory_columns
+    kinematics = arm.kinematics
+    rows = memory.rows
+    dynamics = (
+        kinematics.model,
+        kinematics.data,
+        rows[Row.POSITION][columns],
+        rows[Row.VELOCITY][columns],
+        rows[Row.ACCELERATION][columns],
+        rows[Row.TORQUE][columns],
+    )
+    return _FleetArm(manager, running[0], controller, gripper, columns, dynamics)

@@ -28,12 +28,14 @@ import numpy as np
 import numpy.typing as npt
 
 from armfleet.controllers.controller import ArmContext, Controller
+from armfleet.controllers.finger_law import finger_efforts
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
 from armfleet.controllers.parameters import ParameterSpec
 from armfleet.controllers.position_controller import PositionController, as_slice
 from armfleet.errors import ArmfleetError, GripperCommandError
+from armfleet.joint_memory import JointViews, Row
 from armfleet.kinematics import ArmKinematics
-from armfleet.messages import GripperCommand, GripperMode, GripperState
+from armfleet.messages import FloatArray, GripperCommand, GripperMode, GripperState
 
 logger = logging.getLogger("armfleet")
 
@@ -117,7 +119,7 @@ class GripperController(Controller):
             for j in range(1, kinematics.model.njoints)
             if kinematics.model.joints[j].idx_q in self._fingers
         ]
-        self._mass = np.array([kinematics.model.inertias[j].mass for j in joint_ids])
+        self.finger_mass = np.array([kinematics.model.inertias[j].mass for j in joint_ids])
         self._damping = kinematics.damping[self._fingers]
         n = self._fingers.size
         self._speed = np.minimum(
@@ -127,15 +129,23 @@ class GripperController(Controller):
         self._jerk = np.full(n, float(self.parameters["max_jerk_m_s3"]))
         self._stiffness = float(self.parameters["stiffness_n_m"])
         self._gain_damping = float(self.parameters["damping_n_s_m"])
+        #: Per finger: the feedback gains and the lag behind the reference that means
+        #: blocked (constants, as arrays for the law: see finger_law.py).
+        self.stiffness = np.full(n, self._stiffness)
+        self.gain = np.full(n, self._gain_damping)
+        self.block_distance = np.full(n, float(self.parameters["block_distance_m"]))
         self.trajectory: JerkLimitedTrajectory | None = None
-        self._blocked = [False] * n
+        # The state the law reads, per finger; in a world, views of its joint memory
+        # (see bind()), where the fleet path updates every gripper at once.
+        self._reference = (np.zeros(n), np.zeros(n), np.zeros(n))
+        self._force = np.full(n, min(float(self.parameters["grasp_force_n"]), self.max_force))
+        self._blocked = np.zeros(n, dtype=bool)
+        self._grasping = np.zeros(n, dtype=bool)
+        #: Columns of the world's joint memory the fingers' state is kept in, or None.
+        self.memory_columns: npt.NDArray[np.int_] | None = None
         self._offset_ref = [0.0] * n
-        self._mass_list: list[float] = self._mass.tolist()
         self._damping_list: list[float] = self._damping.tolist()
-        self._grasp = False
-        self._force = min(float(self.parameters["grasp_force_n"]), self.max_force)
         self._target_width = 0.0
-        self._effort = [0.0] * n
         self._state_topic = self.arm.topic("gripper_controller/state")
         commands = self.arm.topic("gripper_controller/commands")
         self.arm.bus.advertise(commands, GripperCommand)
@@ -150,15 +160,45 @@ class GripperController(Controller):
     def on_activate(self) -> None:
         start = np.clip(self.arm.body.position[self._fingers], self._lower, self._upper)
         self.trajectory = JerkLimitedTrajectory(
-            start, self.period, self._speed, self._acceleration, self._jerk
+            start, self.period, self._speed, self._acceleration, self._jerk, self._reference
         )
-        self._blocked = [False] * self._fingers.size
-        self._grasp = False
+        self._blocked[:] = False
+        self._grasping[:] = False
         self._target_width = float(np.sum(start))
         self._position_controller.release(self._fingers)
 
     def on_deactivate(self) -> None:
         self._position_controller.release(np.zeros(0, dtype=int))
+
+    def bind(self, views: JointViews) -> None:
+        """Keep the fingers' reference, force and flags in ``views`` (the arm's columns of
+        the world's joint memory) from now on, with their current values. Fingers whose
+        columns are not contiguous keep their own arrays (no views of them exist)."""
+        part = self._finger_part
+        if not isinstance(part, slice):
+            return
+        rows = (
+            Row.FINGER_REFERENCE_POSITION,
+            Row.FINGER_REFERENCE_VELOCITY,
+            Row.FINGER_REFERENCE_ACCELERATION,
+        )
+        reference = tuple(views.row(row)[part] for row in rows)
+        for view, current in zip(reference, self._reference, strict=True):
+            view[:] = current
+        self._reference = (reference[0], reference[1], reference[2])
+        if self.trajectory is not None:
+            self.trajectory.bind(*self._reference)
+        force = views.row(Row.FINGER_FORCE)[part]
+        blocked, grasping = views.finger_blocked[part], views.finger_grasping[part]
+        force[:], blocked[:], grasping[:] = self._force, self._blocked, self._grasping
+        self._force, self._blocked, self._grasping = force, blocked, grasping
+        start = views.columns.start
+        self.memory_columns = np.arange(part.start, part.stop) + start
+
+    @property
+    def fleet_ready(self) -> bool:
+        """Whether the fleet path can update this gripper (its state is in the memory)."""
+        return self.memory_columns is not None and self.trajectory is not None
 
     # -- commands ---------------------------------------------------------------------
     def check(self, command: GripperCommand) -> GripperCommand:
@@ -187,10 +227,10 @@ class GripperController(Controller):
             self._upper,
         )
         self.trajectory.follow(self.trajectory.plan(per_finger))
-        self._grasp = command.grasp
-        self._force = command.force
+        self._grasping[:] = command.grasp
+        self._force[:] = command.force
         self._target_width = width
-        self._blocked = [False] * self._fingers.size
+        self._blocked[:] = False
 
     def _on_command(self, command: GripperCommand) -> None:
         try:
@@ -211,14 +251,15 @@ class GripperController(Controller):
     @property
     def force(self) -> float:
         """Force the fingers press with now [N] (mean of their efforts, positive closing)."""
-        return -sum(self._effort) / len(self._effort)
+        effort: list[float] = self.arm.body.effort_command[self._finger_part].tolist()
+        return -sum(effort) / len(effort)
 
     @property
     def mode(self) -> GripperMode:
         moving = self.trajectory is not None and self.trajectory.moving
-        if not self._grasp:
+        if not self._grasping.all():
             return GripperMode.MOVING if moving else GripperMode.AT_WIDTH
-        blocked = all(self._blocked)
+        blocked = bool(self._blocked.all())
         if self.width <= self.parameters["min_width_m"] and (blocked or not moving):
             return GripperMode.CLOSED  # on nothing, or what it held slipped out
         return GripperMode.SQUEEZING if blocked else GripperMode.CLOSING
@@ -238,54 +279,56 @@ class GripperController(Controller):
 
     # -- control ----------------------------------------------------------------------
     def update(self, stamp: float) -> None:
-        # Plain floats: with two fingers, numpy's per-call overhead would cost more
-        # than the arithmetic (this runs at 1 kHz on every Panda).
         trajectory = self.trajectory
         assert trajectory is not None  # set by on_activate
         body = self.arm.body
         part = self._finger_part
-        q = body.position[part].tolist()
-        v = body.velocity[part].tolist()
-        k, c, force, blocked = self._stiffness, self._gain_damping, self._force, self._blocked
-        if self._grasp and not all(blocked):
-            lag = self.parameters["block_distance_m"]
-            for i, (q_i, q_ref) in enumerate(zip(q, trajectory.position.tolist(), strict=True)):
-                blocked[i] = blocked[i] or q_i - q_ref > lag
-            if all(blocked):
-                mean = sum(q) / len(q)
-                self._offset_ref = [q_i - mean for q_i in q]
-        if all(blocked):
-            # Squeezing: each finger presses with the grasp force, and a spring keeps
-            # the pair where it closed: independent fingers would let the object and
-            # the fingers slide together along the closing axis (the real gripper's
-            # fingers are coupled).
-            q_mean, v_mean, limit = sum(q) / len(q), sum(v) / len(v), self.max_force
-            effort = [
-                min(
-                    limit,
-                    max(-limit, -force + k * (ref - (q_i - q_mean)) - c * (v_i - v_mean) + d * v_i),
-                )
-                for q_i, v_i, ref, d in zip(q, v, self._offset_ref, self._damping_list, strict=True)
-            ]
+        q, v = body.position[part], body.velocity[part]
+        blocked = self._blocked
+        if self._grasping.all() and not blocked.all():
+            np.logical_or(blocked, q - trajectory.position > self.block_distance, out=blocked)
+            if blocked.all():
+                self.hold_where_closed(q)
+        if blocked.all():
+            body.effort_command[part] = self.squeeze_efforts(q, v)
         else:
-            effort = [
-                -force
-                if stuck
-                else min(force, max(-force, m * a + k * (x - q_i) + c * (u - v_i) + d * v_i))
-                for q_i, v_i, x, u, a, m, d, stuck in zip(
-                    q,
-                    v,
-                    trajectory.position.tolist(),
-                    trajectory.velocity.tolist(),
-                    trajectory.acceleration.tolist(),
-                    self._mass_list,
-                    self._damping_list,
-                    blocked,
-                    strict=True,
-                )
-            ]
-        self._effort = effort
-        body.effort_command[part] = effort
+            body.effort_command[part] = finger_efforts(
+                q, v, self._reference, self.finger_mass, self.stiffness, self.gain, self._damping,
+                self._force, blocked,
+            )  # fmt: skip
+        self.finish_update(stamp)
+
+    def hold_where_closed(self, q: FloatArray) -> None:
+        """Both fingers are blocked at ``q``: keep them there relative to each other."""
+        positions = q.tolist()
+        mean = sum(positions) / len(positions)
+        self._offset_ref = [q_i - mean for q_i in positions]
+
+    def squeeze_efforts(self, q: FloatArray, v: FloatArray) -> list[float]:
+        """Squeezing: each finger presses with the grasp force, and a spring keeps the pair
+        where it closed: independent fingers would let the object and the fingers slide
+        together along the closing axis (the real gripper's fingers are coupled).
+
+        Plain floats: with two fingers, numpy's per-call overhead would cost more than the
+        arithmetic."""
+        positions, velocities = q.tolist(), v.tolist()
+        k, c, force = self._stiffness, self._gain_damping, float(self._force[0])
+        q_mean = sum(positions) / len(positions)
+        v_mean = sum(velocities) / len(velocities)
+        limit = self.max_force
+        return [
+            min(
+                limit,
+                max(-limit, -force + k * (ref - (q_i - q_mean)) - c * (v_i - v_mean) + d * v_i),
+            )
+            for q_i, v_i, ref, d in zip(
+                positions, velocities, self._offset_ref, self._damping_list, strict=True
+            )
+        ]
+
+    def finish_update(self, stamp: float) -> None:
+        """After the efforts are written: publish the state, advance the reference."""
         if self.arm.bus.has_subscribers(self._state_topic):
             self.arm.bus.publish(self._state_topic, self.gripper_state(stamp))
-        trajectory.advance()
+        assert self.trajectory is not None
+        self.trajectory.advance()

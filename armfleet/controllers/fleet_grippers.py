@@ -1,0 +1,82 @@
+"""Every fleet-path gripper updated in one pass over the joint memory.
+
+What :meth:`GripperController.update` does for one gripper, done for all of them:
+the blocked test of closing fingers and the law of fingers not yet squeezing
+(:func:`~armfleet.controllers.finger_law.finger_efforts`) run once over every
+finger column; only grippers that are squeezing something, or whose fingers just
+closed on it, compute their coupled-finger law on their own. Each gripper then
+publishes its state and advances its reference as it would alone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from armfleet.controllers.finger_law import finger_efforts
+from armfleet.controllers.gripper_controller import GripperController
+from armfleet.joint_memory import JointMemory, Row
+
+
+class FleetGrippers:
+    """The grippers of one fleet plan, with their fingers' columns gathered once.
+
+    Args:
+        memory: the world's joint memory.
+        grippers: grippers whose state is in the memory (``fleet_ready``).
+    """
+
+    def __init__(self, memory: JointMemory, grippers: Sequence[GripperController]) -> None:
+        self._memory = memory
+        self.grippers = tuple(grippers)
+        columns = [gripper.memory_columns for gripper in self.grippers]
+        assert all(c is not None for c in columns)  # fleet_ready grippers only
+        sizes = [len(c) for c in columns if c is not None]
+        self._columns = np.concatenate([c for c in columns if c is not None]).astype(np.intp)
+        #: Where each gripper's fingers start in the gathered arrays.
+        self._starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp)
+        self._segments = [
+            slice(int(start), int(start) + size)
+            for start, size in zip(self._starts, sizes, strict=True)
+        ]
+        self._owner = np.repeat(np.arange(len(sizes)), sizes)
+        self._mass = np.concatenate([g.finger_mass for g in self.grippers])
+        self._stiffness = np.concatenate([g.stiffness for g in self.grippers])
+        self._gain = np.concatenate([g.gain for g in self.grippers])
+        self._block_distance = np.concatenate([g.block_distance for g in self.grippers])
+
+    def write_efforts(self) -> None:
+        """Every gripper's finger efforts into the memory (before its reference advances)."""
+        memory, columns = self._memory, self._columns
+        rows = memory.rows
+        q, v = rows[Row.POSITION][columns], rows[Row.VELOCITY][columns]
+        reference = (
+            rows[Row.FINGER_REFERENCE_POSITION][columns],
+            rows[Row.FINGER_REFERENCE_VELOCITY][columns],
+            rows[Row.FINGER_REFERENCE_ACCELERATION][columns],
+        )
+        blocked = memory.finger_blocked[columns]
+        squeezing = self._all(blocked)
+        closing = memory.finger_grasping[columns] & ~squeezing[self._owner]
+        if closing.any():
+            blocked |= closing & (q - reference[0] > self._block_distance)
+            memory.finger_blocked[columns] = blocked
+            closed = self._all(blocked)
+            for index in np.flatnonzero(closed & ~squeezing):
+                self.grippers[index].hold_where_closed(q[self._segments[index]])
+            squeezing = closed
+        effort = finger_efforts(
+            q, v, reference, self._mass, self._stiffness, self._gain,
+            rows[Row.DAMPING][columns], rows[Row.FINGER_FORCE][columns], blocked,
+        )  # fmt: skip
+        for index in np.flatnonzero(squeezing):
+            part = self._segments[index]
+            effort[part] = self.grippers[index].squeeze_efforts(q[part], v[part])
+        rows[Row.EFFORT_COMMAND][columns] = effort
+
+    def _all(self, flags: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+        """Per gripper: whether all its fingers' ``flags`` are set."""
+        every: npt.NDArray[np.bool_] = np.logical_and.reduceat(flags, self._starts)
+        return every
