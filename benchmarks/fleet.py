@@ -1,15 +1,20 @@
-"""Fleet benchmark: the cost of armfleet's control stack against bare PyBullet, in one run.
+"""Fleet benchmark: armfleet's full stack against the plain PyBullet a user would write.
 
 For N Pandas on a 1 m grid at a 1 ms step it measures, per physics step:
-  (a) bare   - PyBullet's stepSimulation alone, same bodies and world settings;
-  (b) motors - PyBullet's built-in POSITION_CONTROL following a target each step;
+  (a) bare   - PyBullet's stepSimulation alone, armfleet's bodies limp (torque mode);
+  (b) motors - PyBullet's built-in POSITION_CONTROL on armfleet's bodies;
   (c) stack  - armfleet's full step: broadcasters, Ruckig, Pinocchio, torque writes,
-               contacts, every arm following random reachable targets.
-The three take turns, repeat by repeat, so a drift in the machine's speed hits all
-three alike. It prints medians (min-max over repeats), the ratios c/a and c/b, the real-time
-factor, the bring-up time of 30 arms, peak RSS with 30 arms, and the tracking
-error of armfleet vs the built-in motors on the same Ruckig trajectory; and writes
-benchmarks/results/fleet.json.
+               grippers, contacts and protective stops, every arm following random
+               reachable targets;
+  (d) plain  - the peer (benchmarks/plain_pybullet.py): the upstream Panda with default
+               loadURDF flags, per arm a Ruckig step and POSITION_CONTROL with position
+               and velocity feed-forward, fed the same kind of targets;
+  (e) plain limp - the peer's bodies limp (the physics alone).
+All take turns, repeat by repeat, so a drift in the machine's speed hits them alike. It
+prints medians (min-max over repeats), the ratios c/d (the target: <= 1.0 at 30 arms,
+<= 1.5 at 1 and 2) and c/a, the real-time factor, the bring-up time of 30 arms, peak
+RSS with 30 arms, and the tracking error of armfleet vs the built-in motors on the same
+Ruckig trajectory; and writes benchmarks/results/fleet.json.
 
     python benchmarks/fleet.py            # N = 1, 2, 10, 30 (a few minutes)
     python benchmarks/fleet.py --short    # N = 2, a few hundred steps (CI)
@@ -36,6 +41,7 @@ import numpy as np
 import pybullet as p
 
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
+from plain_pybullet import PlainFleet  # benchmarks/ is the script's folder
 
 RESULTS = Path(__file__).resolve().parent / "results"
 GRID_COLUMNS = 6
@@ -109,9 +115,16 @@ def measure(arms: int, repeats: int, steps: int, seed: int) -> dict[str, object]
         arm.body.release_brakes()
     world.run(0.05)
     rng = np.random.default_rng(seed)
+    peer = PlainFleet(arms, GRID_COLUMNS)
+    peer_rng = np.random.default_rng(seed)
+    for _ in range(50):
+        peer.step()
     bare: list[float] = []
     motors: list[float] = []
     stack: list[float] = []
+    plain: list[float] = []
+    plain_errors: list[float] = []
+    plain_limp: list[float] = []
     # Interleaved (a, b, c, a, b, c, ...): the three see the same machine, whose speed
     # drifts over minutes. The stack resumes from where it left off each time.
     for _ in range(repeats):
@@ -123,16 +136,31 @@ def measure(arms: int, repeats: int, steps: int, seed: int) -> dict[str, object]
         for arm in world.arms.values():  # PyBullet's motors off again
             arm.body.release_brakes()
         stack += timed(1, steps, lambda: random_targets(world, rng), world.step)
+        plain += timed(1, steps, lambda: peer.random_targets(peer_rng), peer.step)
+        plain_errors.append(peer.tracking_error())
+        paused = p.saveState(physicsClientId=peer.client)
+        plain_limp += timed(
+            1, steps, peer.go_limp, lambda: p.stepSimulation(physicsClientId=peer.client)
+        )
+        p.restoreState(paused, physicsClientId=peer.client)
+        p.removeState(paused, physicsClientId=peer.client)
     world.close()
-    a, b, c = (statistics.median(x) for x in (bare, motors, stack))
+    peer.close()
+    a, b, c, d = (statistics.median(x) for x in (bare, motors, stack, plain))
     return {
         "arms": arms,
         "bare_us": summary(bare),
         "motors_us": summary(motors),
         "stack_us": summary(stack),
+        "plain_us": summary(plain),
+        "plain_limp_us": summary(plain_limp),
+        "stack_over_plain": round(c / d, 3),
         "stack_over_bare": round(c / a, 3),
         "stack_over_motors": round(c / b, 3),
         "realtime_factor": round(1e3 / c, 3),
+        "plain_realtime_factor": round(1e3 / d, 3),
+        "plain_targets": peer.targets_given,
+        "plain_tracking_error_rad": max(plain_errors),
     }
 
 
@@ -240,13 +268,14 @@ def main() -> None:
     fleet = bringup_and_rss(2 if args.short else 30)
     tracking = tracking_comparison()
     print(f"machine load (1 min) before: {load:.2f}, after: {os.getloadavg()[0]:.2f}")
-    print(f"{'arms':>4} {'bare us':>16} {'motors us':>16} {'stack us':>16} "
-          f"{'c/a':>6} {'c/b':>6} {'RTF':>6}")  # fmt: skip
+    columns = ("bare_us", "motors_us", "stack_us", "plain_us", "plain_limp_us")
+    print(f"{'arms':>4} {'(a) bare us':>16} {'(b) motors us':>16} {'(c) stack us':>16} "
+          f"{'(d) plain us':>16} {'(e) plain limp':>16} {'c/d':>6} {'c/a':>6} {'RTF':>6}")  # fmt: skip
     for row in rows:
-        cells = [fmt(row[key]) for key in ("bare_us", "motors_us", "stack_us")]  # type: ignore[arg-type]
-        print(f"{row['arms']:>4} {cells[0]:>16} {cells[1]:>16} {cells[2]:>16} "
-              f"{row['stack_over_bare']:>6} {row['stack_over_motors']:>6} "
-              f"{row['realtime_factor']:>6}")  # fmt: skip
+        cells = [fmt(row[key]) for key in columns]  # type: ignore[arg-type]
+        print(f"{row['arms']:>4} " + " ".join(f"{cell:>16}" for cell in cells)
+              + f" {row['stack_over_plain']:>6} {row['stack_over_bare']:>6}"
+              f" {row['realtime_factor']:>6}")  # fmt: skip
     print(f"bring-up of {fleet['arms']} arms: {fleet['bringup_s']} s, "
           f"peak RSS {fleet['peak_rss_mb']} MB")  # fmt: skip
     print(f"tracking on one Ruckig move: armfleet {tracking['armfleet_max_error_rad']:.2e} rad; "

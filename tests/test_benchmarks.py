@@ -25,14 +25,17 @@ def test_fleet_benchmark_short_mode_writes_every_field(tmp_path: Path) -> None:
     figures = json.loads(out.read_text())
     (row,) = figures["sizes"]
     assert row["arms"] == 2
-    for key in ("bare_us", "motors_us", "stack_us"):
+    for key in ("bare_us", "motors_us", "stack_us", "plain_us", "plain_limp_us"):
         assert 0 < row[key]["min"] <= row[key]["median"] <= row[key]["max"]
     assert row["stack_over_bare"] > 0 and row["realtime_factor"] > 0
+    assert row["stack_over_plain"] > 0
+    # The peer really moves its arms, and tracks (PyBullet's motors with feed-forward).
+    assert row["plain_targets"] > 2 and row["plain_tracking_error_rad"] < 1e-2
     assert figures["fleet"]["bringup_s"] > 0 and figures["fleet"]["peak_rss_mb"] > 0
     tracking = figures["tracking"]
     assert 0 < tracking["armfleet_max_error_rad"] < 1e-3
     assert tracking["position_control_max_error_rad"] > 0
-    assert "c/a" in result.stdout and "tracking" in result.stdout
+    assert "c/d" in result.stdout and "c/a" in result.stdout and "tracking" in result.stdout
 
 
 def test_ik_benchmark_short_mode_reports_every_model(tmp_path: Path) -> None:
