@@ -108,7 +108,7 @@ class Arm:
     # -- what a handle is: readable after close or remove ------------------------------
     @property
     def description(self) -> ArmDescription:
-        """The expanded model (URDF, SRDF, frames): what the arm is, readable for good."""
+        """The expanded model (URDF, home, link pairs that never touch): what the arm is."""
         return self._description
 
     # -- the arm in its world: raise after close or remove --------------------------------

@@ -1,5 +1,6 @@
 """Which contacts of an arm count: not between links of one rigid piece or one joint apart,
-not between pairs its SRDF rules out, and not between the floor and links that never move."""
+not between pairs never seen touching in sampled configurations, and not between the floor
+and links that never move."""
 
 from __future__ import annotations
 
@@ -40,7 +41,8 @@ def ignored_self_pairs(
     """Pairs ``(a, b)``, ``a < b``, of solid links of ``body`` whose contacts don't count.
 
     - links of one rigid piece, or of two pieces one movable joint apart (adjacent);
-    - pairs the upstream SRDF lists in ``<disable_collisions>``.
+    - ``ignored_pairs``: the description's pairs never seen touching
+      (:mod:`armfleet.simulated_body.contact_pairs`).
     """
     groups = rigid_groups(body)
     parent_group = {

@@ -10,8 +10,8 @@ closest points to everything else are read (``getClosestPoints``, which, unlike
 contacts, needs no simulation step), with the contact monitor's rules of what
 counts:
 
-- itself: not links of one rigid piece or one joint apart, nor the pairs its
-  SRDF disables (:func:`armfleet.collision_filter.ignored_self_pairs`);
+- itself: not links of one rigid piece or one joint apart, nor the pairs never
+  seen touching (:func:`armfleet.collision_filter.ignored_self_pairs`);
 - the floor and static objects: not against the links that never move (the
   base standing on them);
 - every other arm and every object: all links.

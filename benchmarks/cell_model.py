@@ -3,7 +3,7 @@ object in one Pinocchio model with coal geometry, checked with Pinocchio's broad
 
 What counts as a collision, as in PyBullet (:mod:`armfleet.collision_filter`):
 every pair of collision objects except two on one joint (so two static things never
-count), two on a parent and child joint, and the link pairs the arms' SRDFs disable.
+count), two on a parent and child joint, and the link pairs that never touch (sampled).
 Meshes are replaced by their convex hulls: PyBullet collides a mesh as its convex
 hull too. The floor is a half-space, the objects are coal boxes, cylinders and
 spheres where they stand. Fingers are not planned: they stay where the world has them.
@@ -107,7 +107,7 @@ class CellModel:
 
     def _add_pairs(self, ignored: set[frozenset[str]], owners: dict[str, str]) -> None:
         """Every pair but: two on one joint (joint 0: two static things), two of one arm
-        one joint apart, and pairs an SRDF rules out."""
+        one joint apart, and pairs never seen touching (the descriptions' ignored_contacts)."""
         model, geom = self._model, self._geom
         objects = geom.geometryObjects
         self._unchecked: set[frozenset[str]] = set()

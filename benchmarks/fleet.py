@@ -269,8 +269,9 @@ def main() -> None:
     tracking = tracking_comparison()
     print(f"machine load (1 min) before: {load:.2f}, after: {os.getloadavg()[0]:.2f}")
     columns = ("bare_us", "motors_us", "stack_us", "plain_us", "plain_limp_us")
-    print(f"{'arms':>4} {'(a) bare us':>16} {'(b) motors us':>16} {'(c) stack us':>16} "
-          f"{'(d) plain us':>16} {'(e) plain limp':>16} {'c/d':>6} {'c/a':>6} {'RTF':>6}")  # fmt: skip
+    headers = ("(a) bare us", "(b) motors us", "(c) stack us", "(d) plain us", "(e) plain limp")
+    print(f"{'arms':>4} " + " ".join(f"{h:>16}" for h in headers)
+          + f" {'c/d':>6} {'c/a':>6} {'RTF':>6}")  # fmt: skip
     for row in rows:
         cells = [fmt(row[key]) for key in columns]  # type: ignore[arg-type]
         print(f"{row['arms']:>4} " + " ".join(f"{cell:>16}" for cell in cells)

@@ -8,7 +8,7 @@ no step) and PyBullet's ``getClosestPoints`` measures every pair that counts:
 - between different bodies (arm and arm, arm and object, arm and floor), the pairs in
   which a link moves, against the clearance ``c``;
 - within one arm, the link pairs the world counts as contacts (not adjacent, not ruled
-  out by the SRDF: :func:`armfleet.collision_filter.ignored_self_pairs`), against the
+  out by sampling: :func:`armfleet.collision_filter.ignored_self_pairs`), against the
   arm's own margin ``min(c, 10 mm)``.
 
 ``CollisionChecker.valid`` must say False whenever PyBullet finds a pair closer than its

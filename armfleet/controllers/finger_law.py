@@ -1,7 +1,11 @@
 """The gripper controller's law for fingers that are not yet squeezing, on arrays.
 
-One function serves a single gripper (its own fingers) and the fleet path (every
-finger of every gripper at once), so the two give the same efforts bit for bit.
+The fleet path runs it over every finger of every gripper at once. A single gripper
+runs the same law on plain floats (``GripperController.update``: for two fingers,
+numpy's per-call overhead costs more than the arithmetic). The two do the same
+floating-point operations in the same order, and ``fmax``/``fmin`` pick as Python's
+``max``/``min`` do (a NaN effort gives way to the limit), so they agree bit for bit
+(``tests/test_fleet_update.py``).
 """
 
 from __future__ import annotations
@@ -37,6 +41,6 @@ def finger_efforts(
     """
     position, velocity, acceleration = reference
     effort = mass * acceleration + stiffness * (position - q) + gain * (velocity - v) + damping * v
-    np.minimum(force, np.maximum(-force, effort), out=effort)
+    np.fmin(force, np.fmax(-force, effort), out=effort)
     pressing: FloatArray = np.where(blocked, -force, effort)
     return pressing

@@ -50,17 +50,18 @@ class FleetGrippers:
     def write_efforts(self) -> None:
         """Every gripper's finger efforts into the memory (before its reference advances)."""
         memory, columns = self._memory, self._columns
-        rows = memory.rows
-        q, v = rows[Row.POSITION][columns], rows[Row.VELOCITY][columns]
+        fingers = memory.block[:, columns]  # every row of every finger: one gather
+        q, v = fingers[Row.POSITION], fingers[Row.VELOCITY]
         reference = (
-            rows[Row.FINGER_REFERENCE_POSITION][columns],
-            rows[Row.FINGER_REFERENCE_VELOCITY][columns],
-            rows[Row.FINGER_REFERENCE_ACCELERATION][columns],
+            fingers[Row.FINGER_REFERENCE_POSITION],
+            fingers[Row.FINGER_REFERENCE_VELOCITY],
+            fingers[Row.FINGER_REFERENCE_ACCELERATION],
         )
         blocked = memory.finger_blocked[columns]
         squeezing = self._all(blocked)
-        closing = memory.finger_grasping[columns] & ~squeezing[self._owner]
-        if closing.any():
+        grasping = memory.finger_grasping[columns]
+        if grasping.any():
+            closing = grasping & ~squeezing[self._owner]
             blocked |= closing & (q - reference[0] > self._block_distance)
             memory.finger_blocked[columns] = blocked
             closed = self._all(blocked)
@@ -69,12 +70,13 @@ class FleetGrippers:
             squeezing = closed
         effort = finger_efforts(
             q, v, reference, self._mass, self._stiffness, self._gain,
-            rows[Row.DAMPING][columns], rows[Row.FINGER_FORCE][columns], blocked,
+            fingers[Row.DAMPING], fingers[Row.FINGER_FORCE], blocked,
         )  # fmt: skip
-        for index in np.flatnonzero(squeezing):
-            part = self._segments[index]
-            effort[part] = self.grippers[index].squeeze_efforts(q[part], v[part])
-        rows[Row.EFFORT_COMMAND][columns] = effort
+        if squeezing.any():
+            for index in np.flatnonzero(squeezing):
+                part = self._segments[index]
+                effort[part] = self.grippers[index].squeeze_efforts(q[part], v[part])
+        memory.rows[Row.EFFORT_COMMAND][columns] = effort
 
     def _all(self, flags: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
         """Per gripper: whether all its fingers' ``flags`` are set."""

@@ -10,8 +10,9 @@ rate, takes the fleet path:
    the joint memory (one world, one physics step: one half-step lead for all),
    RNEA per arm, then damping, clipping and the saturation count in one pass;
    then each arm's state message and Ruckig step;
-3. grippers: the finger law of every gripper in one pass (fleet_grippers.py), then
-   each gripper's state message and reference step;
+3. grippers: from four on, the finger law of every gripper in one pass
+   (fleet_grippers.py), then each gripper's state message and reference step;
+   fewer, arm by arm;
 4. one finiteness check of every effort.
 
 Every other arm (being brought up, in error, running a controller at a slower
@@ -52,6 +53,11 @@ FLEET_CONTROLLER_SETS = (
     (JointStateBroadcaster.type_name, PositionController.type_name),
     (JointStateBroadcaster.type_name, PositionController.type_name, GripperController.type_name),
 )
+
+
+#: From this many grippers on, one pass over all fingers costs less than one update each
+#: (about 13 µs against 3-4 µs per gripper on the development machine).
+GRIPPERS_IN_ONE_PASS = 4
 
 
 @dataclass(frozen=True)
@@ -148,7 +154,8 @@ class FleetUpdate:
         ready = [
             arm.gripper for arm in fleet if arm.gripper is not None and arm.gripper.fleet_ready
         ]
-        grippers = FleetGrippers(self._memory, ready) if ready else None
+        together = len(ready) >= GRIPPERS_IN_ONE_PASS
+        grippers = FleetGrippers(self._memory, ready) if together else None
         return _Plan(
             key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s, grippers
         )

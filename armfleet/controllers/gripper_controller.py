@@ -28,7 +28,6 @@ import numpy as np
 import numpy.typing as npt
 
 from armfleet.controllers.controller import ArmContext, Controller
-from armfleet.controllers.finger_law import finger_efforts
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
 from armfleet.controllers.parameters import ParameterSpec
 from armfleet.controllers.position_controller import PositionController, as_slice
@@ -144,6 +143,7 @@ class GripperController(Controller):
         #: Columns of the world's joint memory the fingers' state is kept in, or None.
         self.memory_columns: npt.NDArray[np.int_] | None = None
         self._offset_ref = [0.0] * n
+        self._mass_list: list[float] = self.finger_mass.tolist()
         self._damping_list: list[float] = self._damping.tolist()
         self._target_width = 0.0
         self._state_topic = self.arm.topic("gripper_controller/state")
@@ -279,23 +279,41 @@ class GripperController(Controller):
 
     # -- control ----------------------------------------------------------------------
     def update(self, stamp: float) -> None:
-        trajectory = self.trajectory
-        assert trajectory is not None  # set by on_activate
+        # Plain floats: with two fingers, numpy's per-call overhead would cost more
+        # than the arithmetic (this runs at 1 kHz on every Panda). The fleet path runs
+        # the same law on arrays of every gripper's fingers (finger_law.py), and gives
+        # the same efforts bit for bit (tests/test_fleet_update.py).
         body = self.arm.body
         part = self._finger_part
-        q, v = body.position[part], body.velocity[part]
-        blocked = self._blocked
-        if self._grasping.all() and not blocked.all():
-            np.logical_or(blocked, q - trajectory.position > self.block_distance, out=blocked)
-            if blocked.all():
-                self.hold_where_closed(q)
-        if blocked.all():
-            body.effort_command[part] = self.squeeze_efforts(q, v)
+        q = body.position[part].tolist()
+        v = body.velocity[part].tolist()
+        position, velocity, acceleration = (array.tolist() for array in self._reference)
+        force = self._force.tolist()
+        blocked = self._blocked.tolist()
+        if self._grasping[0] and not all(blocked):
+            lag = self.block_distance.tolist()
+            blocked = [
+                stuck or q_i - x > lag_i
+                for stuck, q_i, x, lag_i in zip(blocked, q, position, lag, strict=True)
+            ]
+            self._blocked[:] = blocked
+            if all(blocked):
+                self.hold_where_closed(body.position[part])
+        if all(blocked):
+            body.effort_command[part] = self.squeeze_efforts(
+                body.position[part], body.velocity[part]
+            )
         else:
-            body.effort_command[part] = finger_efforts(
-                q, v, self._reference, self.finger_mass, self.stiffness, self.gain, self._damping,
-                self._force, blocked,
-            )  # fmt: skip
+            k, c = self._stiffness, self._gain_damping
+            body.effort_command[part] = [
+                -f
+                if stuck
+                else min(f, max(-f, m * a + k * (x - q_i) + c * (u - v_i) + d * v_i))
+                for q_i, v_i, x, u, a, m, d, f, stuck in zip(
+                    q, v, position, velocity, acceleration, self._mass_list,
+                    self._damping_list, force, blocked, strict=True,
+                )
+            ]  # fmt: skip
         self.finish_update(stamp)
 
     def hold_where_closed(self, q: FloatArray) -> None:

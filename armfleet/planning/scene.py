@@ -8,7 +8,8 @@ half-space at z = 0. A held object is attached to the joint of the hand that hol
 Which pairs count:
 
 - not two geometries of one rigid piece, nor of two pieces one joint apart (adjacent);
-- not pairs the arm's SRDF disables (``<disable_collisions>``);
+- not pairs never seen touching in sampled configurations (the description's
+  ``ignored_contacts``: :mod:`armfleet.simulated_body.contact_pairs`);
 - not a held object against its gripper (the hand and the fingers);
 - and, per request (:meth:`PlanningScene.checker`), only pairs in which something moves
   with the planned joints: two things that stand still cannot start to collide.
@@ -51,7 +52,7 @@ class ArmGeometry:
         model: its Pinocchio model (root ``world`` frame renamed ``<name>__world``).
         geometry: its collision geometry, meshes as convex hulls.
         controlled_joints: the joints the planner moves (``Arm.joint_names``).
-        ignored_pairs: link pairs its SRDF disables.
+        ignored_pairs: link pairs that never touch (the description's ``ignored_contacts``).
         hand_joint: the joint the fingers hang from (a held object is attached to it),
             or None without a gripper.
     """
@@ -97,7 +98,7 @@ def arm_geometry(
         urdf: its URDF text (absolute mesh paths).
         model: its Pinocchio model (from the same text; copied, not changed).
         controlled_joints: prefixed names of the joints planning moves.
-        ignored_pairs: link pairs whose contacts don't count (the SRDF's).
+        ignored_pairs: link pairs whose contacts don't count (never seen touching).
         finger_joints: prefixed names of its finger joints (empty without a gripper).
     """
     own = model.copy()
