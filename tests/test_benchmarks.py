@@ -30,7 +30,7 @@ def test_fleet_benchmark_short_mode_writes_every_field(tmp_path: Path) -> None:
     assert row["stack_over_bare"] > 0 and row["realtime_factor"] > 0
     assert row["stack_over_plain"] > 0
     # The peer really moves its arms, and tracks (PyBullet's motors with feed-forward).
-    assert row["plain_targets"] > 2 and row["plain_tracking_error_rad"] < 1e-2
+    assert row["plain_targets"] >= row["arms"] and row["plain_tracking_error_rad"] < 1e-2
     assert figures["fleet"]["bringup_s"] > 0 and figures["fleet"]["peak_rss_mb"] > 0
     tracking = figures["tracking"]
     assert 0 < tracking["armfleet_max_error_rad"] < 1e-3

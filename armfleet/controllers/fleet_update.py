@@ -27,11 +27,10 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-import pinocchio as pin
 
 from armfleet.controllers.controller_manager import ControllerManager
 from armfleet.controllers.fleet_grippers import FleetGrippers
@@ -43,6 +42,7 @@ from armfleet.controllers.position_controller import (
     feedback_acceleration,
 )
 from armfleet.joint_memory import JointMemory, Row
+from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
 
 if TYPE_CHECKING:
@@ -65,9 +65,9 @@ class _FleetArm:
     """An arm on the fleet path: its manager, controllers and columns of the memory.
 
     Attributes:
-        dynamics: its Pinocchio model and data, and views of its columns of the
-            position, velocity, acceleration and torque rows (RNEA's arguments, made
-            once per lay-out: slicing the rows at every step costs more than RNEA's call).
+        dynamics: its kinematics and views of its columns of the position, velocity,
+            acceleration and torque rows (RNEA's arguments and result, made once per
+            lay-out: slicing the rows at every step costs as much as RNEA's call).
     """
 
     manager: ControllerManager
@@ -75,7 +75,7 @@ class _FleetArm:
     controller: PositionController
     gripper: GripperController | None
     columns: slice
-    dynamics: tuple[Any, Any, FloatArray, FloatArray, FloatArray, FloatArray]
+    dynamics: tuple[ArmKinematics, FloatArray, FloatArray, FloatArray, FloatArray]
 
 
 @dataclass(frozen=True)
@@ -186,12 +186,10 @@ class FleetUpdate:
             half_step_s=plan.half_step_s, out=acceleration, scratch=rows[Row.SCRATCH],
         )  # fmt: skip
         torqued: list[_FleetArm] = []
-        rnea = pin.rnea
         for arm in alive:
-            model, data, q_arm, v_arm, acceleration_arm, torque_arm = arm.dynamics
+            kinematics, q_arm, v_arm, acceleration_arm, torque_arm = arm.dynamics
             try:
-                # What ArmKinematics.rnea computes, on the arm's views of the rows.
-                torque_arm[:] = rnea(model, data, q_arm, v_arm, acceleration_arm)
+                torque_arm[:] = kinematics.rnea(q_arm, v_arm, acceleration_arm)
             except Exception as error:  # its torques are not written; faulted below
                 failed.append((arm, error))
             else:
@@ -281,8 +279,7 @@ def _fleet_arm(arm: Arm, memory: JointMemory) -> _FleetArm | None:
     kinematics = arm.kinematics
     rows = memory.rows
     dynamics = (
-        kinematics.model,
-        kinematics.data,
+        kinematics,
         rows[Row.POSITION][columns],
         rows[Row.VELOCITY][columns],
         rows[Row.ACCELERATION][columns],
