@@ -175,12 +175,14 @@ def summary(samples: list[float]) -> dict[str, float]:
 def bringup_and_rss(arms: int) -> dict[str, float]:
     """Bring-up time and peak RSS of a fresh process holding ``arms`` Pandas."""
     code = (
-        "import time, resource, armfleet\n"
+        "import time, armfleet\n"
         "from armfleet.spec import load_spec, FleetSpec\n"
         f"spec = load_spec('grid_30'); spec = FleetSpec(spec.world, spec.arms[:{arms}])\n"
         "t = time.perf_counter(); w = armfleet.launch(spec, viewer=False)\n"
         "up = time.perf_counter() - t; w.run(0.5)\n"
-        "print(up, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)\n"
+        # VmHWM, not ru_maxrss: Linux carries ru_maxrss over from the parent at fork.
+        "hwm = [l for l in open('/proc/self/status') if l.startswith('VmHWM')][0]\n"
+        "print(up, int(hwm.split()[1]) / 1024)\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=600
