@@ -83,6 +83,9 @@ class World:
         viewer: start a MeshCat viewer (``world.viewer.url``); if it cannot
             start, the world runs without it and the reason is logged.
         viewer_port: web port of the viewer (1..65535); a free one by default.
+        compiled_control: update the position controllers of arms on the fleet path in
+            compiled code (``cpp/fleet_kernel.cpp``); False: in numpy, the reference it is
+            tested against. Results agree to 1e-12 (docs/performance.md).
     """
 
     def __init__(
@@ -93,9 +96,11 @@ class World:
         *,
         viewer: bool = False,
         viewer_port: int | None = None,
+        compiled_control: bool = True,
     ) -> None:
         dt = check_dt(dt)
         viewer = flag(viewer, "viewer")
+        compiled_control = flag(compiled_control, "compiled_control")
         if viewer_port is not None:
             PORT.check(viewer_port, "viewer_port")  # as the CLI's --viewer-port
         gravity = real_number(gravity, "gravity", "[-100, 100] m/s^2", low=-100.0, high=100.0)
@@ -114,7 +119,7 @@ class World:
         self._bus.advertise(BRINGUP_TOPIC, BringupEvent)
         self._arms: dict[str, Arm] = {}
         self._memory = JointMemory(self._client)
-        self._controllers = FleetUpdate(self._memory)
+        self._controllers = FleetUpdate(self._memory, compiled=compiled_control)
         self._step_index = 0
         #: Ended by close(); every arm's lifetime is a child of it.
         self._lifetime = Lifetime(WorldClosed)

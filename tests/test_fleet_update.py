@@ -11,6 +11,7 @@ import pytest
 
 import armfleet
 from armfleet.controllers import fleet_update
+from armfleet.controllers.compiled_control import kernel_built
 from armfleet.controllers.position_controller import PositionController
 from armfleet.messages import ArmMode
 
@@ -26,7 +27,7 @@ FALLING = "arm19"
 Trace = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
 
 
-def scripted_run(slow_arm: str | None = None) -> Trace:
+def scripted_run(slow_arm: str | None = None, *, compiled: bool = True) -> Trace:
     """Every arm's efforts and positions at each step of one scripted scene, and the
     saturation counts at its end.
 
@@ -34,10 +35,11 @@ def scripted_run(slow_arm: str | None = None) -> Trace:
     random targets every 300 steps. arm0 closes on a box and squeezes it (the
     coupled-finger law) while it moves, other Pandas close on nothing and open again,
     arm1 is pulled into a joint-torque limit (clipping, saturation count), and arm19
-    swings into the floor: a protective stop.
+    swings into the floor: a protective stop. ``compiled``: the fleet path's position
+    control in the compiled kernel (else in numpy, the reference).
     """
     rng = np.random.default_rng(11)
-    with armfleet.World() as world:
+    with armfleet.World(compiled_control=compiled) as world:
         for index, (name, model, at) in enumerate(ARMS):
             controller: dict[str, float] = {"kp_s2": 900.0 + 50 * index, "kd_s": 60.0 + index}
             if name == slow_arm:
@@ -93,7 +95,7 @@ def put_box_between_fingers(world: armfleet.World, arm: str) -> None:
 
 def each_arm_on_its_own(monkeypatch: pytest.MonkeyPatch) -> None:
     """From now on every arm is updated by its own controller manager (no fleet path)."""
-    monkeypatch.setattr(fleet_update, "_fleet_arm", lambda arm, memory: None)
+    monkeypatch.setattr(fleet_update, "_fleet_arm", lambda arm, memory, kernel_index: None)
 
 
 def assert_identical(fleet: Trace, plain: Trace) -> None:
@@ -107,9 +109,22 @@ def assert_identical(fleet: Trace, plain: Trace) -> None:
 def test_fleet_path_equals_each_arm_on_its_own_bit_for_bit(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    fleet = scripted_run()
+    fleet = scripted_run(compiled=False)
     each_arm_on_its_own(monkeypatch)
-    assert_identical(fleet, scripted_run())
+    assert_identical(fleet, scripted_run(compiled=False))
+
+
+def test_compiled_path_agrees_with_the_numpy_path() -> None:
+    """The compiled kernel (cpp/fleet_kernel.cpp) against numpy and Pinocchio's bindings:
+    efforts and positions to 1e-12 at every step, the same saturation counts. (Both do
+    the same floating-point operations; on the development machine they agree bit for
+    bit.)"""
+    assert kernel_built(), "the compiled fleet path was not built (pip install .)"
+    compiled, reference = scripted_run(compiled=True), scripted_run(compiled=False)
+    for name, a, b in zip(("efforts", "positions"), compiled[:2], reference[:2], strict=True):
+        worst = max(float(np.abs(x - y).max()) for x, y in zip(a, b, strict=True))
+        assert worst <= 1e-12, f"{name} differ by {worst:.3e}"
+    assert np.array_equal(compiled[2], reference[2]), "saturation counts differ"
 
 
 def test_an_arm_at_another_rate_beside_the_fleet_path_changes_nothing(

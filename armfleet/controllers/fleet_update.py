@@ -6,10 +6,12 @@ rate, takes the fleet path:
 
 1. broadcasters: one copy of the state rows of the joint memory; each arm's
    message holds views of its own columns of that copy;
-2. position controllers: the feedback of every joint in one numpy pass over
-   the joint memory (one world, one physics step: one half-step lead for all),
-   RNEA per arm, then damping, clipping and the saturation count in one pass;
-   then each arm's state message and Ruckig step;
+2. position controllers: the feedback, RNEA, damping, clipping and saturation flags
+   of every arm in one call of the compiled kernel (compiled_control.py); or, as the
+   reference, the feedback of every joint in one numpy pass over the joint memory
+   (one world, one physics step: one half-step lead for all), RNEA per arm, then
+   damping, clipping and the saturation flags in one pass; then each arm's state
+   message and Ruckig step;
 3. grippers: from four on, the finger law of every gripper in one pass
    (fleet_grippers.py), then each gripper's state message and reference step;
    fewer, arm by arm;
@@ -32,6 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from armfleet.controllers.compiled_control import CompiledControl, kernel_built
 from armfleet.controllers.controller_manager import ControllerManager
 from armfleet.controllers.fleet_grippers import FleetGrippers
 from armfleet.controllers.gripper_controller import GripperController
@@ -76,6 +79,8 @@ class _FleetArm:
     gripper: GripperController | None
     columns: slice
     dynamics: tuple[ArmKinematics, FloatArray, FloatArray, FloatArray, FloatArray]
+    #: Its index in the compiled kernel, or None (numpy path).
+    kernel_index: int | None
 
 
 @dataclass(frozen=True)
@@ -93,6 +98,8 @@ class _Plan:
     half_step_s: float
     #: The fleet arms' grippers whose state is in the memory, updated in one pass.
     grippers: FleetGrippers | None
+    #: Kernel indices of every fleet arm, when the kernel has them all (else None).
+    kernel_indices: npt.NDArray[np.int64] | None
 
 
 class FleetUpdate:
@@ -100,10 +107,14 @@ class FleetUpdate:
 
     Args:
         memory: the world's joint memory.
+        compiled: use the compiled kernel where it is built and knows the arm.
     """
 
-    def __init__(self, memory: JointMemory) -> None:
+    def __init__(self, memory: JointMemory, *, compiled: bool = True) -> None:
         self._memory = memory
+        self._compiled = compiled and kernel_built()
+        self._kernel: CompiledControl | None = None
+        self._kernel_index: dict[str, int | None] = {}
         self._arms: list[Arm] = []
         #: The arms' controller managers, read once per lay-out (not per step).
         self._managers: tuple[ControllerManager, ...] = ()
@@ -124,6 +135,17 @@ class FleetUpdate:
         memory.attach([arm.body for arm in self._arms], views)
         self._managers = tuple(arm.controller_manager for arm in self._arms)
         self._plan = None
+        if self._compiled:
+            self._kernel = CompiledControl(
+                memory,
+                [
+                    (arm.kinematics, view.columns.start)
+                    for arm, view in zip(self._arms, views, strict=True)
+                ],
+            )
+            self._kernel_index = {
+                arm.name: index for arm, index in zip(self._arms, self._kernel.indices, strict=True)
+            }
 
     def update(self, stamp: float, step_index: int) -> None:
         """Update every arm's running controllers that are due at ``step_index``."""
@@ -144,7 +166,7 @@ class FleetUpdate:
         others: list[ControllerManager] = []
         mask = np.zeros(self._memory.size, dtype=bool)
         for arm in self._arms:
-            entry = _fleet_arm(arm, self._memory)
+            entry = _fleet_arm(arm, self._memory, self._kernel_index.get(arm.name))
             if entry is None:
                 others.append(arm.controller_manager)
             else:
@@ -156,15 +178,20 @@ class FleetUpdate:
         ]
         together = len(ready) >= GRIPPERS_IN_ONE_PASS
         grippers = FleetGrippers(self._memory, ready) if together else None
-        return _Plan(
-            key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s, grippers
+        indices = [arm.kernel_index for arm in fleet]
+        kernel_indices = (
+            np.array(indices, dtype=np.int64)
+            if fleet and all(index is not None for index in indices)
+            else None
         )
+        return _Plan(
+            key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s, grippers,
+            kernel_indices,
+        )  # fmt: skip
 
     def _update_fleet(self, plan: _Plan, stamp: float) -> None:
         memory = self._memory
-        rows = memory.rows
-        q, v, effort = rows[Row.POSITION], rows[Row.VELOCITY], rows[Row.EFFORT_COMMAND]
-        acceleration = rows[Row.ACCELERATION]
+        effort = memory.rows[Row.EFFORT_COMMAND]
         failed: list[tuple[_FleetArm, Exception]] = []
         # 1. Broadcasters: the state and efforts as they are before this update.
         sample = memory.block[Row.POSITION : Row.EFFORT_COMMAND + 1].copy()
@@ -180,21 +207,13 @@ class FleetUpdate:
             else:
                 alive.append(arm)
         # 2. Position controllers.
-        feedback_acceleration(
-            q, v, rows[Row.REFERENCE_POSITION], rows[Row.REFERENCE_VELOCITY],
-            rows[Row.REFERENCE_ACCELERATION], rows[Row.KP], rows[Row.KD],
-            half_step_s=plan.half_step_s, out=acceleration, scratch=rows[Row.SCRATCH],
-        )  # fmt: skip
-        torqued: list[_FleetArm] = []
-        for arm in alive:
-            kinematics, q_arm, v_arm, acceleration_arm, torque_arm = arm.dynamics
-            try:
-                torque_arm[:] = kinematics.rnea(q_arm, v_arm, acceleration_arm)
-            except Exception as error:  # its torques are not written; faulted below
-                failed.append((arm, error))
-            else:
-                torqued.append(arm)
-        self._write_torques(plan, torqued)
+        kernel = self._kernel
+        if kernel is not None and plan.kernel_indices is not None and len(alive) == len(plan.fleet):
+            kernel.control(plan.kernel_indices, plan.half_step_s)
+            memory.saturation_steps += memory.saturated
+            torqued: list[_FleetArm] = alive
+        else:
+            torqued = self._numpy_control(plan, alive, failed)
         moving: list[_FleetArm] = []
         for arm in torqued:
             try:
@@ -211,6 +230,31 @@ class FleetUpdate:
         if not math.isfinite(effort.dot(effort)):
             for arm in plan.fleet:
                 arm.manager.check_efforts()
+
+    def _numpy_control(
+        self, plan: _Plan, alive: list[_FleetArm], failed: list[tuple[_FleetArm, Exception]]
+    ) -> list[_FleetArm]:
+        """The control law of ``alive`` in numpy and Pinocchio's bindings (the reference);
+        returns the arms whose torques were written (an RNEA that raised goes in ``failed``)."""
+        rows = self._memory.rows
+        acceleration = rows[Row.ACCELERATION]
+        feedback_acceleration(
+            rows[Row.POSITION], rows[Row.VELOCITY], rows[Row.REFERENCE_POSITION],
+            rows[Row.REFERENCE_VELOCITY], rows[Row.REFERENCE_ACCELERATION], rows[Row.KP],
+            rows[Row.KD], half_step_s=plan.half_step_s, out=acceleration,
+            scratch=rows[Row.SCRATCH],
+        )  # fmt: skip
+        torqued: list[_FleetArm] = []
+        for arm in alive:
+            kinematics, q_arm, v_arm, acceleration_arm, torque_arm = arm.dynamics
+            try:
+                torque_arm[:] = kinematics.rnea(q_arm, v_arm, acceleration_arm)
+            except Exception as error:  # its torques are not written; faulted below
+                failed.append((arm, error))
+            else:
+                torqued.append(arm)
+        self._write_torques(plan, torqued)
+        return torqued
 
     def _update_grippers(self, plan: _Plan, moving: list[_FleetArm], stamp: float) -> None:
         """Every moving arm's gripper: in one pass when all arms moved on, else one by one."""
@@ -260,7 +304,7 @@ class FleetUpdate:
         memory.saturation_steps += memory.saturated
 
 
-def _fleet_arm(arm: Arm, memory: JointMemory) -> _FleetArm | None:
+def _fleet_arm(arm: Arm, memory: JointMemory, kernel_index: int | None) -> _FleetArm | None:
     """``arm`` as a fleet-path arm, or None if its own manager must update it."""
     manager, controller = arm.controller_manager, arm.position_controller
     running = manager.running
@@ -285,4 +329,4 @@ def _fleet_arm(arm: Arm, memory: JointMemory) -> _FleetArm | None:
         rows[Row.ACCELERATION][columns],
         rows[Row.TORQUE][columns],
     )
-    return _FleetArm(manager, running[0], controller, gripper, columns, dynamics)
+    return _FleetArm(manager, running[0], controller, gripper, columns, dynamics, kernel_index)
