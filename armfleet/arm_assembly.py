@@ -127,6 +127,7 @@ def assemble_arm(
     lifetime: Lifetime | None = None,
     neighbours: Iterable[Neighbour] = (),
     planner: MotionPlanner | None = None,
+    compiled: bool = True,
 ) -> Arm:
     """Load the body (brakes on, at ``start``) and configure its controllers.
 
@@ -136,7 +137,8 @@ def assemble_arm(
     ``frame_pose`` gives the world pose (4x4) of any frame the world knows
     (e.g. ``world.tf.world_pose``): Cartesian goals may be given in them.
     ``lifetime`` is the arm's (see :mod:`armfleet.lifetime`), ended by the world.
-    ``planner`` plans its collision-free motions (the world's).
+    ``planner`` plans its collision-free motions (the world's). ``compiled``: its
+    references step in compiled code where it is built (the world's choice).
 
     Both parameter sets are validated before the arm is returned; on any error
     the body is removed again and the world is as it was.
@@ -147,7 +149,7 @@ def assemble_arm(
     )  # fmt: skip
     try:
         filter_collisions(client, body, ground, description.ignored_contacts)
-        context = ArmContext(name, body, kinematics, bus, dt)
+        context = ArmContext(name, body, kinematics, bus, dt, compiled)
         manager = ControllerManager(context, on_fault=on_fault)
         broadcaster = JointStateBroadcaster(
             context,

@@ -119,6 +119,7 @@ class World:
         self._bus.advertise(BRINGUP_TOPIC, BringupEvent)
         self._arms: dict[str, Arm] = {}
         self._memory = JointMemory(self._client)
+        self._compiled_control = compiled_control
         self._controllers = FleetUpdate(self._memory, compiled=compiled_control)
         self._step_index = 0
         #: Ended by close(); every arm's lifetime is a child of it.
@@ -374,6 +375,7 @@ class World:
             neighbours=self._contacts.neighbours(),
             lifetime=Lifetime(lambda: UnknownArm(name, list(self._arms)), self._lifetime),
             planner=self._planner,
+            compiled=self._compiled_control,
         )
         self._arms[name] = arm
         self._frames.claim(FrameOwner.arm(name), frames)

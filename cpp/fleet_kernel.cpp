@@ -18,15 +18,18 @@
 #include <nanobind/eigen/dense.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody/data.hpp>
 #include <pinocchio/multibody/model.hpp>
+#include <ruckig/ruckig.hpp>
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -184,6 +187,81 @@ class FleetKernel {
   std::vector<Arm> arms_;
 };
 
+using Array = nb::ndarray<double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+// One jerk-limited reference stepped by Ruckig's C++ library: what JerkLimitedTrajectory.advance
+// does with the Python bindings (update, copy the new state out, pass it to the input), without
+// building three Python lists per step. It writes into three bound arrays (views of the joint
+// memory, or the trajectory's own arrays).
+class ReferenceStepper {
+ public:
+  ReferenceStepper(std::size_t dofs, double period_s)
+      : otg_(dofs, period_s), input_(dofs), output_(dofs), dofs_(dofs) {}
+
+  void bind(Array position, Array velocity, Array acceleration) {
+    if (position.shape(0) != dofs_ || velocity.shape(0) != dofs_ || acceleration.shape(0) != dofs_) {
+      throw std::invalid_argument("a reference stepper binds three arrays of one value per joint");
+    }
+    position_ = position;
+    velocity_ = velocity;
+    acceleration_ = acceleration;
+  }
+
+  // The motion to follow from now on: Ruckig's input, field by field (the rest default).
+  void follow(const std::vector<double>& current_position, const std::vector<double>& current_velocity,
+              const std::vector<double>& current_acceleration, const std::vector<double>& target_position,
+              const std::vector<double>& target_velocity, const std::vector<double>& target_acceleration,
+              const std::vector<double>& max_velocity, const std::vector<double>& max_acceleration,
+              const std::vector<double>& max_jerk, bool velocity_interface,
+              std::optional<double> minimum_duration) {
+    ruckig::InputParameter<ruckig::DynamicDOFs> input(dofs_);
+    copy(current_position, input.current_position);
+    copy(current_velocity, input.current_velocity);
+    copy(current_acceleration, input.current_acceleration);
+    copy(target_position, input.target_position);
+    copy(target_velocity, input.target_velocity);
+    copy(target_acceleration, input.target_acceleration);
+    copy(max_velocity, input.max_velocity);
+    copy(max_acceleration, input.max_acceleration);
+    copy(max_jerk, input.max_jerk);
+    input.control_interface =
+        velocity_interface ? ruckig::ControlInterface::Velocity : ruckig::ControlInterface::Position;
+    input.minimum_duration = minimum_duration;
+    input_ = input;
+  }
+
+  // One period along the motion; Ruckig's result (Working 0, Finished 1, errors < 0).
+  int step() {
+    const ruckig::Result result = otg_.update(input_, output_);
+    if (result != ruckig::Result::Working && result != ruckig::Result::Finished) {
+      return static_cast<int>(result);
+    }
+    double* position = position_.data();
+    double* velocity = velocity_.data();
+    double* acceleration = acceleration_.data();
+    if (position == nullptr) throw std::logic_error("a reference stepper steps into bound arrays");
+    for (std::size_t i = 0; i < dofs_; ++i) {
+      position[i] = output_.new_position[i];
+      velocity[i] = output_.new_velocity[i];
+      acceleration[i] = output_.new_acceleration[i];
+    }
+    output_.pass_to_input(input_);
+    return static_cast<int>(result);
+  }
+
+ private:
+  void copy(const std::vector<double>& from, std::vector<double>& to) const {
+    if (from.size() != dofs_) throw std::invalid_argument("a Ruckig input has one value per joint");
+    to = from;
+  }
+
+  ruckig::Ruckig<ruckig::DynamicDOFs> otg_;
+  ruckig::InputParameter<ruckig::DynamicDOFs> input_;
+  ruckig::OutputParameter<ruckig::DynamicDOFs> output_;
+  std::size_t dofs_;
+  Array position_, velocity_, acceleration_;
+};
+
 }  // namespace
 
 NB_MODULE(_fleet_kernel, module) {
@@ -198,4 +276,14 @@ NB_MODULE(_fleet_kernel, module) {
            nb::arg("a"))
       .def("control", &FleetKernel::control, nb::arg("block"), nb::arg("indices"),
            nb::arg("half_step_s"), nb::arg("saturated"));
+  nb::class_<ReferenceStepper>(module, "ReferenceStepper")
+      .def(nb::init<std::size_t, double>(), nb::arg("dofs"), nb::arg("period_s"))
+      .def("bind", &ReferenceStepper::bind, nb::arg("position"), nb::arg("velocity"),
+           nb::arg("acceleration"))
+      .def("follow", &ReferenceStepper::follow, nb::arg("current_position"),
+           nb::arg("current_velocity"), nb::arg("current_acceleration"), nb::arg("target_position"),
+           nb::arg("target_velocity"), nb::arg("target_acceleration"), nb::arg("max_velocity"),
+           nb::arg("max_acceleration"), nb::arg("max_jerk"), nb::arg("velocity_interface"),
+           nb::arg("minimum_duration").none())
+      .def("step", &ReferenceStepper::step);
 }

@@ -36,6 +36,8 @@ class ArmContext:
         kinematics: the arm's Pinocchio model.
         bus: the world's bus.
         dt: physics step [s].
+        compiled: step references and control laws in compiled code where it is built
+            (``World(compiled_control=...)``).
     """
 
     name: str
@@ -43,6 +45,7 @@ class ArmContext:
     kinematics: ArmKinematics
     bus: Bus
     dt: float
+    compiled: bool = True
 
     def topic(self, relative: str) -> str:
         """``/<name>/<relative>``."""

@@ -160,8 +160,9 @@ class GripperController(Controller):
     def on_activate(self) -> None:
         start = np.clip(self.arm.body.position[self._fingers], self._lower, self._upper)
         self.trajectory = JerkLimitedTrajectory(
-            start, self.period, self._speed, self._acceleration, self._jerk, self._reference
-        )
+            start, self.period, self._speed, self._acceleration, self._jerk, self._reference,
+            compiled=self.arm.compiled,
+        )  # fmt: skip
         self._blocked[:] = False
         self._grasping[:] = False
         self._target_width = float(np.sum(start))

@@ -3,6 +3,12 @@
 Besides Ruckig's own motions, the reference can follow a sampled motion (one
 position, velocity and acceleration per period, e.g. a straight tool line);
 a stop or a new plan takes over from wherever that reference is.
+
+Motions are planned with Ruckig's Python bindings. Where armfleet's compiled part is
+built, they are stepped by Ruckig's C++ library directly into the reference arrays
+(``cpp/fleet_kernel.cpp``'s ``ReferenceStepper``: no Python lists per step); else,
+or with ``compiled=False``, by the bindings' ``update``. Both run the same algorithm
+on the same input (``tests/test_fleet_update.py`` compares whole runs).
 """
 
 from __future__ import annotations
@@ -15,6 +21,13 @@ import ruckig
 
 from armfleet.errors import ArmfleetError
 from armfleet.messages import FloatArray
+
+try:  # built by `pip install`; a source tree that was never built has none
+    from armfleet.controllers._fleet_kernel import ReferenceStepper
+except ImportError:  # pragma: no cover - the test command always builds it
+    ReferenceStepper = None
+
+_WORKING, _FINISHED = int(ruckig.Result.Working), int(ruckig.Result.Finished)
 
 
 class TrajectoryError(ArmfleetError):
@@ -64,6 +77,7 @@ class JerkLimitedTrajectory:
         period: time between :meth:`advance` calls [s].
         max_velocity, max_acceleration, max_jerk: per-joint limits (units per s^k).
         buffers: arrays to keep the position, velocity and acceleration in (see :meth:`bind`).
+        compiled: step with Ruckig's C++ library where it is built (see the module docstring).
     """
 
     def __init__(
@@ -74,8 +88,13 @@ class JerkLimitedTrajectory:
         max_acceleration: FloatArray,
         max_jerk: FloatArray,
         buffers: tuple[FloatArray, FloatArray, FloatArray] | None = None,
+        *,
+        compiled: bool = True,
     ) -> None:
         dofs = len(start)
+        self._stepper = (
+            ReferenceStepper(dofs, period) if compiled and ReferenceStepper is not None else None
+        )
         self._otg = ruckig.Ruckig(dofs, period)
         self._input = ruckig.InputParameter(dofs)
         self._output = ruckig.OutputParameter(dofs)
@@ -87,6 +106,8 @@ class JerkLimitedTrajectory:
         self.acceleration = np.zeros(dofs)
         if buffers is not None:
             self.bind(*buffers)
+        elif self._stepper is not None:
+            self._stepper.bind(self.position, self.velocity, self.acceleration)
         self._moving = False
         self._samples: SampledMotion | None = None
         self._sample_index = 0
@@ -96,6 +117,8 @@ class JerkLimitedTrajectory:
         joint memory), with its current values."""
         position[:], velocity[:], acceleration[:] = self.position, self.velocity, self.acceleration
         self.position, self.velocity, self.acceleration = position, velocity, acceleration
+        if self._stepper is not None:
+            self._stepper.bind(position, velocity, acceleration)
 
     @property
     def moving(self) -> bool:
@@ -141,9 +164,7 @@ class JerkLimitedTrajectory:
         result = self._otg.calculate(stopping, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot plan a stop: {result}")
-        self._input = stopping
-        self._samples = None
-        self._moving = True
+        self._take(stopping)
         return float(trajectory.duration)
 
     def _input_from_here(self, max_acceleration: Any, max_jerk: Any) -> Any:
@@ -168,6 +189,7 @@ class JerkLimitedTrajectory:
             return np.empty((0, dofs))
         if self._samples is not None:
             return np.array(self._samples.position[self._sample_index :], dtype=float)
+        self._sync_input()
         trajectory = ruckig.Trajectory(dofs)
         result = self._otg.calculate(self._input, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
@@ -178,9 +200,29 @@ class JerkLimitedTrajectory:
 
     def follow(self, plan: MotionPlan) -> None:
         """Start following ``plan`` (made by :meth:`plan` from the current state)."""
-        self._input = plan.input
+        self._take(plan.input)
+
+    def _take(self, motion: Any) -> None:
+        """Follow the Ruckig input ``motion`` from now on."""
+        self._input = motion
         self._samples = None
         self._moving = True
+        if self._stepper is not None:
+            self._stepper.follow(
+                motion.current_position, motion.current_velocity, motion.current_acceleration,
+                motion.target_position, motion.target_velocity, motion.target_acceleration,
+                motion.max_velocity, motion.max_acceleration, motion.max_jerk,
+                motion.control_interface == ruckig.ControlInterface.Velocity,
+                motion.minimum_duration,
+            )  # fmt: skip
+
+    def _sync_input(self) -> None:
+        """Bring the Python input up to the reference's state, as ``pass_to_input`` would
+        have at each step (the C++ stepper advances only its own copy)."""
+        if self._stepper is not None:
+            self._input.current_position = self.position.tolist()
+            self._input.current_velocity = self.velocity.tolist()
+            self._input.current_acceleration = self.acceleration.tolist()
 
     def follow_samples(self, motion: SampledMotion) -> None:
         """Start following ``motion``: its first row is the reference one period from now."""
@@ -195,16 +237,22 @@ class JerkLimitedTrajectory:
         if self._samples is not None:
             self._advance_sample(self._samples)
             return
-        result = self._otg.update(self._input, self._output)
-        if result not in (ruckig.Result.Working, ruckig.Result.Finished):
-            self._moving = False
-            raise TrajectoryError(f"Ruckig failed mid-motion: {result}")
-        output = self._output
-        self.position[:] = output.new_position
-        self.velocity[:] = output.new_velocity
-        self.acceleration[:] = output.new_acceleration
-        output.pass_to_input(self._input)
-        if result == ruckig.Result.Finished:
+        if self._stepper is not None:
+            result = self._stepper.step()
+            if result != _WORKING and result != _FINISHED:
+                self._moving = False
+                raise TrajectoryError(f"Ruckig failed mid-motion: {ruckig.Result(result)}")
+        else:
+            result = self._otg.update(self._input, self._output)
+            if result not in (ruckig.Result.Working, ruckig.Result.Finished):
+                self._moving = False
+                raise TrajectoryError(f"Ruckig failed mid-motion: {result}")
+            output = self._output
+            self.position[:] = output.new_position
+            self.velocity[:] = output.new_velocity
+            self.acceleration[:] = output.new_acceleration
+            output.pass_to_input(self._input)
+        if result == _FINISHED:
             self._moving = False
             self.velocity[:] = 0.0
             self.acceleration[:] = 0.0

@@ -152,6 +152,7 @@ class PositionController(Controller):
             np.full(n, self.parameters["max_acceleration_rad_s2"]),
             np.full(n, self.parameters["max_jerk_rad_s3"]),
             buffers=self._reference_parts(),
+            compiled=self.arm.compiled,
         )
         self._ref_velocity[:] = 0.0
         self._ref_acceleration[:] = 0.0
