@@ -98,6 +98,8 @@ class _Plan:
     half_step_s: float
     #: The fleet arms' grippers whose state is in the memory, updated in one pass.
     grippers: FleetGrippers | None
+    #: The fleet arms with a gripper, and whether it is in that pass.
+    gripper_arms: tuple[tuple[_FleetArm, bool], ...]
     #: Kernel indices of every fleet arm, when the kernel has them all (else None).
     kernel_indices: npt.NDArray[np.int64] | None
 
@@ -184,9 +186,13 @@ class FleetUpdate:
             if fleet and all(index is not None for index in indices)
             else None
         )
+        in_pass = set(map(id, grippers.grippers)) if grippers is not None else set()
+        gripper_arms = tuple(
+            (arm, id(arm.gripper) in in_pass) for arm in fleet if arm.gripper is not None
+        )
         return _Plan(
             key, tuple(fleet), tuple(others), mask, bool(mask.all()), half_step_s, grippers,
-            kernel_indices,
+            gripper_arms, kernel_indices,
         )  # fmt: skip
 
     def _update_fleet(self, plan: _Plan, stamp: float) -> None:
@@ -259,27 +265,31 @@ class FleetUpdate:
     def _update_grippers(self, plan: _Plan, moving: list[_FleetArm], stamp: float) -> None:
         """Every moving arm's gripper: in one pass when all arms moved on, else one by one."""
         together = plan.grippers
-        own = [arm for arm in moving if arm.gripper is not None]
         if together is not None and len(moving) == len(plan.fleet):
             try:
                 together.write_efforts()
             except Exception:  # can't tell whose: each on its own, as its manager would
-                together = None
+                pass
             else:
-                own = [arm for arm in own if arm.gripper not in together.grippers]
-                for arm in moving:
-                    gripper = arm.gripper
-                    if gripper is not None and gripper in together.grippers:
-                        try:
-                            gripper.finish_update(stamp)
-                        except Exception as exc:
-                            arm.manager.fail_controller(gripper, exc)
-        for arm in own:
-            assert arm.gripper is not None
-            try:
-                arm.gripper.update(stamp)
-            except Exception as exc:
-                arm.manager.fail_controller(arm.gripper, exc)
+                for arm, in_pass in plan.gripper_arms:
+                    self._update_gripper(arm, stamp, finish_only=in_pass)
+                return
+        for arm in moving:
+            self._update_gripper(arm, stamp, finish_only=False)
+
+    @staticmethod
+    def _update_gripper(arm: _FleetArm, stamp: float, *, finish_only: bool) -> None:
+        """``arm``'s gripper update (or only its end, after the one pass), contained."""
+        gripper = arm.gripper
+        if gripper is None:
+            return
+        try:
+            if finish_only:
+                gripper.finish_update(stamp)
+            else:
+                gripper.update(stamp)
+        except Exception as exc:
+            arm.manager.fail_controller(gripper, exc)
 
     def _write_torques(self, plan: _Plan, arms: list[_FleetArm]) -> None:
         """Damping, clipping and saturation count of ``arms`` (their RNEA torques are in)."""
