@@ -1,16 +1,20 @@
 #!/usr/bin/env bash
 # Install everything the test suite needs, then run lint, types and tests.
 # Works on a fresh Debian machine: a virtualenv in .venv, armfleet with its
-# test extra, and Debian's chromium for the browser tests (never a downloaded one).
+# test extra (its compiled fleet path built with the machine's g++), and Debian's
+# chromium for the browser tests (never a downloaded one).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if ! command -v chromium >/dev/null 2>&1; then
-  echo "== installing Debian's chromium for the viewer's browser tests"
+missing=()
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)  # the viewer's browser tests
+command -v g++ >/dev/null 2>&1 || missing+=(g++)  # armfleet's C++ part (CMake: from PyPI)
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "== installing Debian's ${missing[*]}"
   sudo_cmd=""
   [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
   $sudo_cmd apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq chromium >/dev/null
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
 if [ ! -x .venv/bin/python ]; then

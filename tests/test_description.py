@@ -371,7 +371,8 @@ def test_malformed_description_names_its_file(tmp_path: Path, case: str) -> None
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """armfleet built as a wheel from this checkout, offline (about 1 s)."""
+    """armfleet built as a wheel from this checkout, offline: the compiled fleet path
+    (C++) is built too, reusing the editable install's build folder when it is there."""
     out = tmp_path_factory.mktemp("wheel")
     subprocess.run(
         [
@@ -381,7 +382,7 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
         ],
         check=True,
         capture_output=True,
-        timeout=120,
+        timeout=900,
     )  # fmt: skip
     (built,) = out.glob("armfleet-*.whl")
     return built
@@ -405,6 +406,10 @@ def test_installed_wheel_finds_its_data_without_the_source_tree(
     with zipfile.ZipFile(wheel) as archive:
         archive.extractall(tmp_path / "site")
     probe = (
+        # The editable install's import hook (scikit-build-core's) outranks PYTHONPATH:
+        # without it, this Python sees only the unpacked wheel's armfleet.
+        "import sys; sys.meta_path[:] = [f for f in sys.meta_path"
+        " if not type(f).__module__.startswith('_editable_skbc_')];"
         "import armfleet, armfleet.paths as paths;"
         "from armfleet.description import ModelLibrary;"
         "print(armfleet.__file__); print(paths.data_dir('description'));"
