@@ -38,6 +38,20 @@ def test_fleet_benchmark_short_mode_writes_every_field(tmp_path: Path) -> None:
     assert "c/d" in result.stdout and "c/a" in result.stdout and "tracking" in result.stdout
 
 
+def test_step_phases_benchmark_times_every_phase(tmp_path: Path) -> None:
+    out = tmp_path / "phases.json"
+    command = [sys.executable, str(BENCHMARKS / "step_phases.py"), "--arms", "2"]
+    result = subprocess.run(
+        [*command, "--repeats", "1", "--steps", "50", "--json", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    phases = json.loads(out.read_text())["phases_us"]
+    assert set(phases) >= {"controllers", "write", "physics", "read", "contacts"}
+    assert phases["physics"] > 0 and phases["controllers"] > 0 and phases["read"] > 0
+    assert "total" in result.stdout
+
+
 def test_ik_benchmark_short_mode_reports_every_model(tmp_path: Path) -> None:
     out = tmp_path / "ik.json"
     result = subprocess.run(
