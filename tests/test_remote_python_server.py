@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -39,6 +40,10 @@ def served() -> Iterator[Served]:
         stepping.wait()
         while not stop.is_set():
             world.step()
+            # Let the server's and the test's threads take the GIL between steps: stepping
+            # flat out, this thread kept it for whole 5 ms switch intervals, and a client
+            # call (many handoffs) took seconds and sometimes passed its 5 s timeout.
+            time.sleep(0)
 
     thread = threading.Thread(target=loop)
     thread.start()
