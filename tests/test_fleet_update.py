@@ -28,7 +28,7 @@ Trace = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
 
 
 def scripted_run(
-    slow_arm: str | None = None, *, compiled: bool = True, arms: int = len(ARMS)
+    slow_arm: str | None = None, *, compiled: bool = True, count: int = len(ARMS)
 ) -> Trace:
     """Every arm's efforts and positions at each step of one scripted scene, and the
     saturation counts at its end.
@@ -37,13 +37,13 @@ def scripted_run(
     random targets every 300 steps. arm0 closes on a box and squeezes it (the
     coupled-finger law) while it moves, other Pandas close on nothing and open again,
     arm1 is pulled into a joint-torque limit (clipping, saturation count), and arm9
-    swings into the floor: a protective stop. ``arms``: the first that many of ARMS
+    swings into the floor: a protective stop. ``count``: the first that many of ARMS
     (at least 10, so every event happens). ``compiled``: the fleet path's position
     control in the compiled kernel (else in numpy, the reference).
     """
     rng = np.random.default_rng(11)
     with armfleet.World(compiled_control=compiled) as world:
-        for index, (name, model, at) in enumerate(ARMS[:arms]):
+        for index, (name, model, at) in enumerate(ARMS[:count]):
             controller: dict[str, float] = {"kp_s2": 900.0 + 50 * index, "kd_s": 60.0 + index}
             if name == slow_arm:
                 controller["update_rate_hz"] = 500.0
@@ -112,9 +112,9 @@ def assert_identical(fleet: Trace, plain: Trace) -> None:
 def test_fleet_path_equals_each_arm_on_its_own_bit_for_bit(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    fleet = scripted_run(compiled=False, arms=10)
+    fleet = scripted_run(compiled=False, count=10)
     each_arm_on_its_own(monkeypatch)
-    assert_identical(fleet, scripted_run(compiled=False, arms=10))
+    assert_identical(fleet, scripted_run(compiled=False, count=10))
 
 
 def test_compiled_path_agrees_with_the_numpy_path() -> None:
@@ -135,9 +135,9 @@ def test_an_arm_at_another_rate_beside_the_fleet_path_changes_nothing(
 ) -> None:
     """One arm at 500 Hz takes its own path while the others take the fleet path: the
     fleet-wide operations must leave its efforts alone."""
-    mixed = scripted_run(slow_arm="arm7", arms=10)
+    mixed = scripted_run(slow_arm="arm7", count=10)
     each_arm_on_its_own(monkeypatch)
-    assert_identical(mixed, scripted_run(slow_arm="arm7", arms=10))
+    assert_identical(mixed, scripted_run(slow_arm="arm7", count=10))
 
 
 def test_standard_arms_take_the_fleet_path(monkeypatch: pytest.MonkeyPatch) -> None:
