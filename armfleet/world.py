@@ -122,6 +122,7 @@ class World:
         self._compiled_control = compiled_control
         self._controllers = FleetUpdate(self._memory, compiled=compiled_control)
         self._step_index = 0
+        self._stepping_s = 0.0
         #: Ended by close(); every arm's lifetime is a child of it.
         self._lifetime = Lifetime(WorldClosed)
         self._tf = TfTree(self._arm_states, lambda: self._objects.objects, self._lifetime)
@@ -518,6 +519,7 @@ class World:
         always describe the world as it is now.
         """
         self._check_open()
+        began = time.perf_counter()
         self._requests.drain()
         if self.closed:  # a request closed it
             return
@@ -539,6 +541,13 @@ class World:
                 self._viewer.tick(self)
         finally:
             self._guard.end_step()
+            self._stepping_s += time.perf_counter() - began
+
+    @property
+    def stepping_s(self) -> float:
+        """Wall time spent in :meth:`step` since the world was made [s] (the simulation's
+        share of a program's time; a sweep's rows report it per run)."""
+        return self._stepping_s
 
     @property
     def safety(self) -> SafetySupervisor:

@@ -23,6 +23,8 @@ from armfleet.cli import (
     replay_command,
     reset_command,
     spawn_command,
+    sweep_command,
+    sweep_report_command,
     topic_command,
     world_commands,
 )
@@ -55,6 +57,8 @@ def build_parser() -> OneLineParser:
     plot_command.add_parser(subparsers)
     replay_command.add_parser(subparsers)
     recover_command.add_parser(subparsers)
+    sweep_command.add_parser(subparsers)
+    sweep_report_command.add_parser(subparsers)
     parser.commands = tuple(subparsers.choices)
     return parser
 

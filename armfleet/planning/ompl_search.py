@@ -30,6 +30,22 @@ ou.setLogLevel(ou.LOG_ERROR)
 OMPL_SEED = 16
 ou.RNG.setSeed(OMPL_SEED)
 
+
+def restart_random_numbers(seed: int) -> None:
+    """Restart OMPL's random numbers from ``seed``, so that the searches that follow do
+    not depend on the searches made before them in this process (a sweep's run, which
+    must give the same plans whichever runs its worker made before).
+
+    Every search makes its own OMPL objects, and each object takes its seed from OMPL's
+    seed generator, which this restarts.
+    """
+    ou.setLogLevel(ou.LOG_NONE)  # OMPL says generation has already started: that is meant
+    try:
+        ou.RNG.setSeed(1 + seed % (2**32 - 1))  # OMPL ignores a seed of 0
+    finally:
+        ou.setLogLevel(ou.LOG_ERROR)
+
+
 #: Motion-check step as a fraction of the state space's extent (OMPL's resolution).
 MOTION_RESOLUTION = 0.01
 #: OMPL's ``PathSimplifier`` steps run on a solution, in order.

@@ -23,6 +23,7 @@ Format (all keys but ``name`` and ``model`` optional; units in the key names)::
       controllers: {...}
     objects:                       # added after the arms; see armfleet.spec.object_entries
       - {name: table, shape: box, size_m: [0.8, 0.6, 0.4], mass_kg: 0, at_m: [0.6, 0, 0.2]}
+    sweep: {...}                   # read by armfleet.sweeps (docs/sweeps.md), not by launch
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ from armfleet.spec.scene_rehearsal import LocatedRehearsal
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
 
-TOP_KEYS = ("world", "arms", "grid", "objects")
+TOP_KEYS = ("world", "arms", "grid", "objects", "sweep")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
 ORIENTATION_KEYS = ("yaw_deg", "yaw_rad", "rpy_deg", "rpy_rad")
 ARM_KEYS = ("name", "model", "at_m", "initial_positions", "controllers", *ORIENTATION_KEYS)

@@ -1,0 +1,42 @@
+"""The progress line of a sweep: runs done, failed, runs per second and the time left."""
+
+from __future__ import annotations
+
+import sys
+
+from tqdm import tqdm
+
+
+class SweepProgress:
+    """A tqdm bar on stderr, or nothing when ``enabled`` is False.
+
+    On a terminal it redraws in place; into a file or pipe it writes a line every
+    ``log_interval_s`` seconds.
+    """
+
+    def __init__(self, total: int, done_before: int, enabled: bool, log_interval_s: float = 10.0):
+        self.failed = 0
+        self._bar: tqdm[None] | None = None
+        if enabled:
+            terminal = sys.stderr.isatty()
+            self._bar = tqdm(
+                total=total,
+                unit="run",
+                desc="sweep",
+                file=sys.stderr,
+                dynamic_ncols=True,
+                mininterval=0.2 if terminal else log_interval_s,
+                maxinterval=max(10.0, log_interval_s),
+                postfix={"failed": 0, "kept": done_before},
+            )
+
+    def update(self, runs: int, failed: int) -> None:
+        self.failed += failed
+        if self._bar is not None:
+            if failed:
+                self._bar.set_postfix(failed=self.failed, refresh=False)
+            self._bar.update(runs)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()

@@ -1,0 +1,246 @@
+"""``armfleet.sweep(...)``: a scenario for N seeds on Ray, one Parquet row per run."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import pyarrow as pa
+
+from armfleet import __version__
+from armfleet.checks.number_ranges import NumberRange
+from armfleet.checks.user_paths import file_problem, given_path
+from armfleet.sweeps.definition import MAX_RUNS, SweepDefinition, load_sweep
+from armfleet.sweeps.errors import SweepError
+from armfleet.sweeps.progress import SweepProgress
+from armfleet.sweeps.ray_session import check_address, ray_session
+from armfleet.sweeps.results_file import ResultsWriter, journal_path, read_results
+from armfleet.sweeps.results_schema import SweepMetadata
+from armfleet.sweeps.runner import RunCounts, SweepDriver
+
+RUNS = NumberRange(1, MAX_RUNS, "runs", integer=True)
+WORKERS = NumberRange(1, 100_000, "workers", integer=True)
+RUN_TIMEOUT_S = NumberRange(0.001, 86_400, "seconds")
+BASE_SEED = NumberRange(0, 2**62, "seed", integer=True)
+BATCH = NumberRange(1, 10_000, "runs per task", integer=True)
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """What a sweep left.
+
+    Attributes:
+        table: every row of the results file (earlier rows of a resumed sweep included).
+        path: the results file (None when the caller gave no ``output``).
+        counts: what this call ran (finished, failed, wall time).
+        definition: the sweep.
+        interrupted: it was stopped by Ctrl-C before every run finished.
+    """
+
+    table: pa.Table
+    path: Path | None
+    counts: RunCounts
+    definition: SweepDefinition
+    interrupted: bool = False
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped the sweep; :attr:`result` holds the rows kept (the file is whole)."""
+
+    def __init__(self, result: SweepResult) -> None:
+        super().__init__("sweep interrupted")
+        self.result = result
+
+
+def sweep(
+    scenario: str | Path,
+    *,
+    runs: int | None = None,
+    address: str | None = None,
+    workers: int | None = None,
+    output: str | Path | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    run_timeout_s: float | None = None,
+    base_seed: int | None = None,
+    batch_size: int | None = None,
+    progress: bool = True,
+) -> SweepResult:
+    """Run ``scenario`` for ``runs`` seeds (``base_seed + i``) on Ray.
+
+    Everything is checked before Ray starts; then a private local Ray instance (or the
+    cluster at ``address``) runs the batches, and the rows go to ``output`` as they come.
+
+    Args:
+        scenario: a shipped scenario (``handover``, ``reach``, ...), a launch spec with a
+            ``sweep:`` section, or a sweep file.
+        runs: how many runs; default: the sweep's ``runs``.
+        address: None for a private local instance; ``"auto"``, ``"ray://HOST:PORT"``
+            or ``"HOST:PORT"`` to join a running cluster.
+        workers: runs at once; default: every core of the local machine (or CPU of the
+            cluster).
+        output: the Parquet file; None keeps the rows in :attr:`SweepResult.table` only.
+        resume: run only the seeds ``output`` does not hold yet.
+        overwrite: replace an existing ``output`` (otherwise refused, unless resuming).
+        run_timeout_s: a run past it fails; default: the sweep's ``run_timeout_s``.
+        base_seed: default: the sweep's ``base_seed``.
+        batch_size: runs per Ray task; default: sized from the runs seen (~2 s per task).
+        progress: show the progress bar on stderr.
+
+    Raises:
+        SweepError, SpecError: bad input, before anything starts.
+        SweepInterrupted: Ctrl-C; the results file holds every finished run.
+    """
+    definition = _configured(load_sweep(scenario), runs, run_timeout_s, base_seed)
+    count = definition.runs
+    if count is None:
+        raise SweepError(f"{scenario}: give the number of runs (--runs N); its sweep sets none")
+    if workers is not None:
+        workers = int(WORKERS.check(workers, "workers"))
+    if batch_size is not None:
+        batch_size = int(BATCH.check(batch_size, "batch_size"))
+    if address is not None:
+        check_address(address)
+    temporary = None
+    if output is None:
+        temporary = tempfile.TemporaryDirectory(prefix="armfleet-sweep-")
+        path = Path(temporary.name) / "results.parquet"
+    else:
+        path = _output_path(output, resume, overwrite)
+    try:
+        kept = _kept_rows(path, definition) if resume else None
+        done = set() if kept is None else {int(s) for s in kept.column("seed").to_pylist()}
+        seeds = [
+            s for s in range(definition.base_seed, definition.base_seed + count) if s not in done
+        ]
+        metadata = _metadata(definition, count) if kept is None else _resumed(kept, count)
+        integers = frozenset(
+            column
+            for parameter in definition.randomization
+            if parameter.distribution.is_integer
+            for column in parameter.columns
+        )
+        counts, interrupted = RunCounts(), False
+        if seeds:
+            counts, interrupted = _run(
+                definition,
+                seeds,
+                path,
+                metadata,
+                integers,
+                kept,
+                address,
+                workers,
+                batch_size,
+                progress,
+            )
+        elif kept is None:
+            ResultsWriter(path, metadata, integers).close()
+        table = read_results(path)
+        result = SweepResult(table, None if temporary else path, counts, definition, interrupted)
+    finally:
+        if temporary is not None:
+            temporary.cleanup()
+    if interrupted:
+        raise SweepInterrupted(result)
+    return result
+
+
+def _run(
+    definition: SweepDefinition,
+    seeds: list[int],
+    path: Path,
+    metadata: SweepMetadata,
+    integers: frozenset[str],
+    kept: pa.Table | None,
+    address: str | None,
+    workers: int | None,
+    batch_size: int | None,
+    show: bool,
+) -> tuple[RunCounts, bool]:
+    with ray_session(address, workers) as session:
+        writer = ResultsWriter(path, metadata, integers, kept)
+        progress = SweepProgress(len(seeds), 0 if kept is None else kept.num_rows, show)
+        driver = SweepDriver(session, definition, writer, progress, batch_size)
+        interrupted = False
+        try:
+            driver.run(seeds)
+        except KeyboardInterrupt:
+            interrupted = True
+        finally:
+            progress.close()
+            writer.close()
+    return driver.counts, interrupted
+
+
+def _configured(
+    definition: SweepDefinition,
+    runs: int | None,
+    run_timeout_s: float | None,
+    base_seed: int | None,
+) -> SweepDefinition:
+    changes: dict[str, object] = {}
+    if runs is not None:
+        changes["runs"] = int(RUNS.check(runs, "runs"))
+    if run_timeout_s is not None:
+        changes["run_timeout_s"] = RUN_TIMEOUT_S.check(run_timeout_s, "run_timeout_s")
+    if base_seed is not None:
+        changes["base_seed"] = int(BASE_SEED.check(base_seed, "base_seed"))
+    return replace(definition, **changes)  # type: ignore[arg-type]
+
+
+def _output_path(output: str | Path, resume: bool, overwrite: bool) -> Path:
+    path = given_path(output, "results file")
+    if path.suffix != ".parquet":
+        raise SweepError(f"results file {str(output)!r}: give a .parquet file")
+    folder = path.parent
+    if not folder.is_dir():
+        raise SweepError(f"results file {str(output)!r}: folder {str(folder)!r} not found")
+    if not os.access(folder, os.W_OK):
+        raise SweepError(f"results file {str(output)!r}: folder {str(folder)!r} is not writable")
+    exists = file_problem(path) != "not found" or file_problem(journal_path(path)) is None
+    if exists and not resume and not overwrite:
+        raise SweepError(
+            f"{path} exists; --resume runs the seeds it lacks, --overwrite replaces it, or "
+            "give another -o"
+        )
+    if exists and overwrite:
+        journal_path(path).unlink(missing_ok=True)
+    return path
+
+
+def _kept_rows(path: Path, definition: SweepDefinition) -> pa.Table | None:
+    if file_problem(path) == "not found" and file_problem(journal_path(path)) is not None:
+        return None  # nothing to resume: a fresh sweep
+    table = read_results(path)
+    metadata = SweepMetadata.from_schema(table.schema)
+    assert metadata is not None  # read_results checked it
+    theirs = (metadata.task, metadata.base_seed, metadata.parameters)
+    ours = (definition.task.name, definition.base_seed, definition.parameter_columns)
+    if theirs != ours:
+        raise SweepError(
+            f"{path} holds another sweep (task {metadata.task}, base seed {metadata.base_seed}, "
+            f"{len(metadata.parameters)} parameter columns); resume it with the same scenario "
+            "and base seed, or give another -o"
+        )
+    return table
+
+
+def _metadata(definition: SweepDefinition, runs: int) -> SweepMetadata:
+    return SweepMetadata(
+        scenario=definition.scenario,
+        spec=definition.spec.source,
+        task=definition.task.name,
+        base_seed=definition.base_seed,
+        runs=runs,
+        parameters=definition.parameter_columns,
+        armfleet=__version__,
+    )
+
+
+def _resumed(kept: pa.Table, runs: int) -> SweepMetadata:
+    metadata = SweepMetadata.from_schema(kept.schema)
+    assert metadata is not None
+    return replace(metadata, runs=max(runs, metadata.runs))
