@@ -59,6 +59,7 @@ from armfleet.recording import (
 from armfleet.remote import connect
 from armfleet.spawn_pose import SpawnPose
 from armfleet.spec import FleetSpec, SpecError, load_spec
+from armfleet.sweeps import SweepError, SweepResult, sweep
 from armfleet.world import World
 
 __version__ = "0.1.0"
@@ -98,6 +99,8 @@ __all__ = [
     "SpawnPose",
     "SpecError",
     "StartPoseCollision",
+    "SweepError",
+    "SweepResult",
     "TFMessage",
     "TargetPoseError",
     "TransformStamped",
@@ -115,4 +118,5 @@ __all__ = [
     "open_recording",
     "plot_recording",
     "record",
+    "sweep",
 ]

@@ -82,7 +82,7 @@ def test_a_badly_written_distribution_is_refused(entry: object, words: str) -> N
         parse_distribution(entry)
 
 
-def parameter(target: str, entry: dict[str, object]) -> RandomParameter:
+def parameter(target: str, entry: object) -> RandomParameter:
     distribution, relative = parse_distribution(entry)
     return RandomParameter(target, distribution, relative)
 
@@ -211,7 +211,7 @@ def test_a_task_file_next_to_the_sweep_is_found(tmp_path: Path) -> None:
 
 def test_an_unknown_scenario_lists_the_shipped_ones() -> None:
     with pytest.raises(
-        SweepError, match="unknown scenario: 'handvoer'; shipped scenarios: .*handover"
+        SweepError, match=r"unknown scenario: 'handvoer'; shipped scenarios: .*handover"
     ):
         load_sweep("handvoer")
     with pytest.raises(SweepError, match="defines no sweep"):

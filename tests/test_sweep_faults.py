@@ -99,7 +99,7 @@ def test_a_local_instance_listens_on_loopback_only() -> None:
     with ray_session(None, 2) as session:
         ray = session.ray
 
-        @ray.remote
+        @ray.remote  # type: ignore[untyped-decorator]
         def pid() -> int:
             return os.getpid()
 

@@ -1,4 +1,26 @@
 """Sweeps: a scenario (a launch spec and a task) run for many seeds on Ray, one row per run.
 
-See docs/sweeps.md.
+>>> import armfleet
+>>> result = armfleet.sweep("reach", runs=40, output="reach.parquet")
+>>> result.table.to_pandas().groupby("task.arm_count").reached_fraction.mean()
+
+See docs/sweeps.md: how to write a task and a randomization, local and cluster use.
 """
+
+from armfleet.sweeps.definition import SweepDefinition, load_sweep, shipped_scenarios
+from armfleet.sweeps.errors import SweepError
+from armfleet.sweeps.results_file import read_results
+from armfleet.sweeps.run import run_seed
+from armfleet.sweeps.sweep import SweepInterrupted, SweepResult, sweep
+
+__all__ = [
+    "SweepDefinition",
+    "SweepError",
+    "SweepInterrupted",
+    "SweepResult",
+    "load_sweep",
+    "read_results",
+    "run_seed",
+    "shipped_scenarios",
+    "sweep",
+]

@@ -148,9 +148,9 @@ def _check_arm(
             raise TargetError(
                 f"{controller} has no numeric parameter {name!r}; valid: {', '.join(numbers)}"
             )
-        base = _controller_value(arm, controller, name)
+        value = _controller_value(arm, controller, name)
         lower, upper = schema[name].lower, schema[name].upper
-        _check_range(parameter, base, size, (0,), low, high, lower, upper)
+        _check_range(parameter, value, size, (0,), low, high, lower, upper)
 
 
 def _check_object(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.metadata
 import os
 import tempfile
 from dataclasses import dataclass, replace
@@ -9,7 +10,6 @@ from pathlib import Path
 
 import pyarrow as pa
 
-from armfleet import __version__
 from armfleet.checks.number_ranges import NumberRange
 from armfleet.checks.user_paths import file_problem, given_path
 from armfleet.sweeps.definition import MAX_RUNS, SweepDefinition, load_sweep
@@ -236,7 +236,7 @@ def _metadata(definition: SweepDefinition, runs: int) -> SweepMetadata:
         base_seed=definition.base_seed,
         runs=runs,
         parameters=definition.parameter_columns,
-        armfleet=__version__,
+        armfleet=importlib.metadata.version("armfleet"),
     )
 
 

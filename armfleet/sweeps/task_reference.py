@@ -76,7 +76,8 @@ class TaskReference:
                 f"{self.name} is a {type(task).__name__}, not a function "
                 "task(world, rng, **parameters) -> dict"
             )
-        return task
+        function: Task = task
+        return function
 
 
 def task_reference(text: str, base_dir: Path | None = None) -> TaskReference:
