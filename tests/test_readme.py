@@ -37,6 +37,7 @@ PAGES = (
     "descriptions-and-specs.md",
     "design.md",
     "planning.md",
+    "sweeps.md",
 )
 #: Pages whose ``python`` blocks need more than this file gives them, and who runs them.
 RUN_ELSEWHERE = {

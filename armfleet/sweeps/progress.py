@@ -16,6 +16,7 @@ class SweepProgress:
 
     def __init__(self, total: int, done_before: int, enabled: bool, log_interval_s: float = 10.0):
         self.failed = 0
+        self._kept = done_before
         self._bar: tqdm[None] | None = None
         if enabled:
             terminal = sys.stderr.isatty()
@@ -34,7 +35,7 @@ class SweepProgress:
         self.failed += failed
         if self._bar is not None:
             if failed:
-                self._bar.set_postfix(failed=self.failed, refresh=False)
+                self._bar.set_postfix(failed=self.failed, kept=self._kept, refresh=False)
             self._bar.update(runs)
 
     def close(self) -> None:
