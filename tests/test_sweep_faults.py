@@ -41,6 +41,8 @@ objects:
 """
 
 RUNS = 16
+#: Ray's dashboard's port, when one runs.
+DASHBOARD_PORT = 8265
 RUN_TIMEOUT_S = 2.0
 
 
@@ -108,6 +110,7 @@ def test_a_local_instance_listens_on_loopback_only() -> None:
         pids = descendants(os.getpid()) | workers | _processes_mentioning(session_dir)
         sockets = listening(pids)
     assert len(sockets) >= 4  # GCS, raylet, workers: there is something to check
+    assert not [s for s in sockets if s[2] == DASHBOARD_PORT]  # the dashboard stays off
     exposed = [s for s in sockets if not is_loopback(s[1])]
     assert not exposed, f"Ray listens beyond loopback: {exposed}"
 

@@ -11,10 +11,13 @@ listen on all interfaces. Joining a cluster by address is the user's explicit ch
 
 from __future__ import annotations
 
+import ipaddress
 import logging
 import os
+import shutil
 import socket
 import sys
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -103,36 +106,67 @@ def ray_session(address: str | None, workers: int | None) -> Iterator[RaySession
     """
     if address is not None:
         check_address(address)
-    ray = _import_ray(local=address is None)
+    ray = _import_ray(local=address is None or _is_loopback(address))
     if ray.is_initialized():
         raise SweepError(
             "Ray is already initialized in this process; call ray.shutdown() first, or "
             "let the sweep start and stop its own"
         )
+    private = None
     if address is None:
         count = workers or os.cpu_count() or 1
+        # Its own folder: no other program finds it there (Ray's default folder names the
+        # last cluster started, for any ray.init() to join), and nothing is left behind.
+        private = tempfile.mkdtemp(prefix="armfleet-ray-")
         ray.init(
             address="local",
             num_cpus=count,
             include_dashboard=False,
             log_to_driver=False,
             logging_level=logging.ERROR,
+            _temp_dir=private,
         )
         session = RaySession(ray, True, count, "local")
     else:
         try:
             ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
         except Exception as exc:  # Ray raises several kinds for a refused connection
-            raise SweepError(f"cannot join the Ray cluster at {address}: {exc}") from None
+            hint = ""
+            if address != "auto" and "RAY_AUTH_MODE" not in os.environ:
+                hint = " (a cluster with token authentication, Ray's default, needs "
+                hint += "RAY_AUTH_MODE=token for an address given explicitly)"
+            raise SweepError(f"cannot join the Ray cluster at {address}: {exc}{hint}") from None
         cpus = int(ray.cluster_resources().get("CPU", 1))
         session = RaySession(ray, False, workers or max(1, cpus), address)
     try:
         yield session
     finally:
         ray.shutdown()
+        if private is not None:
+            shutil.rmtree(private, ignore_errors=True)
+
+
+def _is_loopback(address: str) -> bool:
+    """Whether ``address`` (``auto``: the cluster started here) is on the loopback interface:
+    a driver joining such a cluster must take the loopback address as its node's too (Ray
+    would otherwise put the machine's address in place of 127.0.0.1 and miss the cluster)."""
+    if address == "auto":
+        try:
+            with open(os.path.join(_ray_temp_dir(), "ray_current_cluster")) as marker:
+                address = marker.read().strip()
+        except OSError:
+            return False
+    if address.startswith("ray://"):
+        return False  # a Ray Client needs no node address of its own
+    host = urlsplit(f"//{address}").hostname or ""
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return host == "localhost"
 
 
 def _import_ray(*, local: bool) -> ModuleType:
+    """``ray``, imported with a loopback node address when ``local``."""
     if "ray" not in sys.modules and local:
         os.environ[LOOPBACK_SWITCH] = "0"  # before Ray reads it, as it is imported
     import ray

@@ -1,0 +1,79 @@
+"""Joining a running Ray cluster by address: a real head node (``ray start --head``, on the
+loopback interface, in a folder of its own), joined through its GCS address and through
+Ray Client (``ray://``). The runs happen in the cluster's workers, not in the sweep's."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+
+ARMFLEET = [sys.executable, "-m", "armfleet.cli.main"]
+RAY = Path(sys.executable).with_name("ray")
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+@pytest.fixture(scope="module")
+def head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[int, int, Path]]:
+    """A one-machine cluster: (GCS port, Ray Client port, its folder)."""
+    folder = tmp_path_factory.mktemp("ray-head")
+    gcs, client = free_port(), free_port()
+    env = {**os.environ, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}  # loopback only
+    process = subprocess.Popen(
+        [str(RAY), "start", "--head", "--block", f"--port={gcs}",
+         f"--ray-client-server-port={client}", "--num-cpus=2", "--include-dashboard=false",
+         "--disable-usage-stats", f"--temp-dir={folder}"],
+        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            try:
+                socket.create_connection(("127.0.0.1", client), timeout=1).close()
+                break
+            except OSError:
+                assert process.poll() is None, "ray start --head ended"
+                time.sleep(0.3)
+        else:
+            pytest.fail("the head node did not start within 60 s")
+        yield gcs, client, folder
+    finally:
+        os.killpg(process.pid, signal.SIGTERM)
+        try:
+            process.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+
+
+@pytest.mark.parametrize("scheme", ["", "ray://"])
+def test_a_sweep_joins_a_cluster_by_address(
+    head: tuple[int, int, Path], tmp_path: Path, scheme: str
+) -> None:
+    gcs, client, folder = head
+    address = f"ray://127.0.0.1:{client}" if scheme else f"127.0.0.1:{gcs}"
+    output = tmp_path / "r.parquet"
+    env = {**os.environ, "RAY_AUTH_MODE": "token"}  # Ray asks it of an explicit address
+    result = subprocess.run(
+        [*ARMFLEET, "sweep", "reach", "--runs", "4", "--address", address, "-o", str(output),
+         "--quiet"],
+        capture_output=True, text=True, timeout=240, env=env,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    table = pq.read_table(output).to_pylist()
+    assert sorted(row["seed"] for row in table) == [0, 1, 2, 3]
+    assert all(row["ok"] for row in table)
+    for pid in {row["pid"] for row in table}:  # the cluster's raylet started the workers
+        assert list(folder.glob(f"session_*/logs/worker-*-{pid}.out")), pid
