@@ -40,6 +40,7 @@ def launch(
     viewer: bool | None = None,
     viewer_port: int | None = None,
     before_spawn: Callable[[World], None] | None = None,
+    models: ModelLibrary | None = None,
 ) -> World:
     """Check the whole scene, then create the spec's world, bring its arms up one at a
     time, and add its objects.
@@ -53,6 +54,9 @@ def launch(
         viewer_port: web port of the viewer.
         before_spawn: called with the new world before the first arm comes up
             (e.g. to subscribe to ``/bringup``).
+        models: the model library to take the arms from; a new one by default. A
+            program launching many worlds (a sweep's worker) passes one library to
+            all of them: each model's description is then read and expanded once.
 
     Returns:
         The world with every arm ready and every object in place; close it when done.
@@ -69,7 +73,12 @@ def launch(
             f"launch: before_spawn takes a function of the world (or None), "
             f"got {type(before_spawn).__name__}"
         )
-    models = ModelLibrary()  # one for the check and the world: its templates are made once
+    if models is not None and not isinstance(models, ModelLibrary):
+        raise ArmfleetError(
+            f"launch: models takes an armfleet.description.ModelLibrary (or None), "
+            f"got {type(models).__name__}"
+        )
+    models = models or ModelLibrary()  # one for the check and the world: templates made once
     if isinstance(spec, FleetSpec):
         rehearse(spec, models)  # a spec file was rehearsed as it was read
     else:

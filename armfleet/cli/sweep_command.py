@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from pathlib import Path
+from types import FrameType
 
 from armfleet.cli.number_arguments import integer_in, number_in
 from armfleet.cli.parser import OneLineParser
@@ -88,6 +90,9 @@ def run(args: argparse.Namespace) -> int:
     if output is None:
         output = f"sweep-{Path(args.scenario).stem}.parquet"
     began = time.perf_counter()
+    # A polite kill (SIGTERM: a job scheduler's, a closed session's) stops it as Ctrl-C
+    # does: the results file is closed properly, with every finished run.
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
         result = sweep(
             args.scenario,
@@ -109,8 +114,15 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     _report(result, time.perf_counter() - began, args.plot_against)
     return 0
+
+
+def _interrupt(signum: int, frame: FrameType | None) -> None:
+    del signum, frame
+    raise KeyboardInterrupt
 
 
 def _report(result: SweepResult, seconds: float, plot_against: str | None) -> None:

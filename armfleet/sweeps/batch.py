@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from armfleet.description import ModelLibrary
 from armfleet.sweeps.definition import SweepDefinition
 from armfleet.sweeps.run import Row, run_seed
 
@@ -19,4 +20,5 @@ def run_batch(definition: SweepDefinition, seeds: Sequence[int]) -> list[Row]:
         task = definition.task.load()
     except Exception:  # each run then reports why the task cannot be loaded
         task = None
-    return [run_seed(definition, seed, task) for seed in seeds]
+    models = ModelLibrary()  # each model's description read once for the whole batch
+    return [run_seed(definition, seed, task, models) for seed in seeds]

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from armfleet.description import ModelLibrary
 from armfleet.launch import launch
 from armfleet.planning.ompl_search import restart_random_numbers
 from armfleet.sweeps.definition import SweepDefinition
@@ -34,12 +35,19 @@ Row = dict[str, Any]
 Metric = bool | int | float | str
 
 
-def run_seed(definition: SweepDefinition, seed: int, task: Task | None = None) -> Row:
+def run_seed(
+    definition: SweepDefinition,
+    seed: int,
+    task: Task | None = None,
+    models: ModelLibrary | None = None,
+) -> Row:
     """The row of the run of ``seed``: run columns, drawn parameters, and the task's
     metrics under ``"metrics"`` (a dict; empty when the run failed).
 
     Args:
         task: the loaded task (loaded from ``definition.task`` when None).
+        models: the model library to launch from (a batch's runs share one: each
+            model is read once per batch); a new one when None.
     """
     began = time.perf_counter()
     row: Row = {name: None for name in RUN_COLUMNS}
@@ -55,7 +63,7 @@ def run_seed(definition: SweepDefinition, seed: int, task: Task | None = None) -
             task = task or definition.task.load()
             spec, keywords = apply_draws(definition.spec, draws)
             spec = replace(spec, world=replace(spec.world, viewer=False, realtime=False))
-            world = launch(spec, viewer=False)
+            world = launch(spec, viewer=False, models=models)
             row["bringup_s"] = time.perf_counter() - began
             task_began = time.perf_counter()
             metrics = task(world, np.random.default_rng(seed), **definition.parameters, **keywords)
