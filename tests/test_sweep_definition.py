@@ -18,6 +18,9 @@ from armfleet.sweeps.definition import load_sweep, shipped_scenarios
 from armfleet.sweeps.distributions import DistributionError, parse_distribution
 from armfleet.sweeps.errors import SweepError
 from armfleet.sweeps.randomization import RandomParameter, TargetError, apply_draws, check_target
+from armfleet.sweeps.results_file import ResultsWriter
+from armfleet.sweeps.results_schema import SweepMetadata
+from armfleet.sweeps.sweep import sweep
 
 TASK = "armfleet.sweeps.scenarios.handover:handover"
 
@@ -216,3 +219,27 @@ def test_an_unknown_scenario_lists_the_shipped_ones() -> None:
         load_sweep("handvoer")
     with pytest.raises(SweepError, match="defines no sweep"):
         load_sweep(load_spec("bob_and_toby").source)
+
+
+def test_resume_refuses_a_file_of_another_or_a_changed_sweep(tmp_path: Path) -> None:
+    """Before anything starts: resuming must not mix runs of two different sweeps."""
+    first = load_sweep(write_sweep(tmp_path, "  objects.bar.mass_kg: {uniform: [0.1, 0.2]}\n"))
+    results = tmp_path / "r.parquet"
+    metadata = SweepMetadata(
+        scenario="cell.yaml",
+        spec=first.spec.source,
+        task=first.task.name,
+        base_seed=0,
+        runs=3,
+        parameters=first.parameter_columns,
+        digest=first.digest,
+    )
+    ResultsWriter(results, metadata).close()
+    changed = write_sweep(tmp_path, "  objects.bar.mass_kg: {uniform: [0.1, 0.3]}\n")
+    assert load_sweep(changed).digest != first.digest
+    with pytest.raises(SweepError, match="holds another sweep"):
+        sweep(changed, runs=3, output=results, resume=True)
+    with pytest.raises(SweepError, match="exists; --resume runs the seeds it lacks"):
+        sweep(changed, runs=3, output=results)
+    with pytest.raises(SweepError, match=r"give a \.parquet file"):
+        sweep(changed, runs=3, output=tmp_path / "r.csv")

@@ -19,7 +19,8 @@ distribution outside its parameter's range, a task that is not a function of
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import hashlib
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,22 @@ class SweepDefinition:
     base_seed: int = 0
     runs: int | None = None
     run_timeout_s: float = DEFAULT_RUN_TIMEOUT_S
+
+    @property
+    def digest(self) -> str:
+        """A fingerprint of what a run depends on (the spec's content, the task's name, its
+        parameters, the randomization): a resumed sweep must have the same one."""
+        content = repr(
+            (
+                replace(self.spec, source=""),
+                self.task.name,
+                self.task.source,
+                sorted(self.parameters.items()),
+                [(p.target, p.relative, repr(p.distribution)) for p in self.randomization],
+                self.base_seed,
+            )
+        )
+        return hashlib.sha256(content.encode()).hexdigest()[:16]
 
     @property
     def parameter_columns(self) -> tuple[str, ...]:

@@ -49,6 +49,7 @@ class SweepMetadata:
         parameters: the drawn parameters' columns, in order.
         metrics: the metrics' columns, in order.
         armfleet: armfleet's version that wrote the file.
+        digest: the sweep's fingerprint (:attr:`SweepDefinition.digest`).
     """
 
     scenario: str
@@ -59,6 +60,7 @@ class SweepMetadata:
     parameters: tuple[str, ...] = ()
     metrics: tuple[str, ...] = ()
     armfleet: str = ""
+    digest: str = ""
 
     def to_json(self) -> bytes:
         return json.dumps(asdict(self)).encode()

@@ -34,8 +34,8 @@ TASK_TARGET_S = 2.0
 MAX_BATCH = 64
 #: Times Ray runs a batch again after its worker died.
 MAX_RETRIES = 2
-#: Grace beyond a batch's time limits before the driver kills its worker [s].
-BACKSTOP_GRACE_S = 60.0
+#: Grace beyond (twice) a batch's time limits before the driver kills its worker [s].
+BACKSTOP_GRACE_S = 30.0
 
 
 @dataclass
@@ -123,7 +123,8 @@ class SweepDriver:
         size = 1 if alone else self._batch_size(len(pending))
         seeds = tuple(pending.popleft() for _ in range(min(size, len(pending))))
         now = time.perf_counter()
-        limit = len(seeds) * (self._definition.run_timeout_s + 10.0) + BACKSTOP_GRACE_S
+        # Twice its runs' limits: a queued batch may first wait for a worker's last batch.
+        limit = 2 * len(seeds) * (self._definition.run_timeout_s + 10.0) + BACKSTOP_GRACE_S
         ref = self._remote.remote(self._definition_ref, seeds)
         self._in_flight[ref] = _Batch(seeds, now, now + limit, alone)
 

@@ -217,13 +217,18 @@ def _kept_rows(path: Path, definition: SweepDefinition) -> pa.Table | None:
     table = read_results(path)
     metadata = SweepMetadata.from_schema(table.schema)
     assert metadata is not None  # read_results checked it
-    theirs = (metadata.task, metadata.base_seed, metadata.parameters)
-    ours = (definition.task.name, definition.base_seed, definition.parameter_columns)
+    theirs = (metadata.task, metadata.base_seed, metadata.parameters, metadata.digest)
+    ours = (
+        definition.task.name,
+        definition.base_seed,
+        definition.parameter_columns,
+        definition.digest,
+    )
     if theirs != ours:
         raise SweepError(
             f"{path} holds another sweep (task {metadata.task}, base seed {metadata.base_seed}, "
-            f"{len(metadata.parameters)} parameter columns); resume it with the same scenario "
-            "and base seed, or give another -o"
+            f"{len(metadata.parameters)} parameter columns, or a spec, parameters or "
+            "randomization changed since); resume it with the same sweep, or give another -o"
         )
     return table
 
@@ -237,6 +242,7 @@ def _metadata(definition: SweepDefinition, runs: int) -> SweepMetadata:
         runs=runs,
         parameters=definition.parameter_columns,
         armfleet=importlib.metadata.version("armfleet"),
+        digest=definition.digest,
     )
 
 
