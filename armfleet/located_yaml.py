@@ -237,6 +237,8 @@ def load_located(text: str | bytes, source: str = "<text>") -> Any:
     except yaml.YAMLError as exc:
         line = _line(getattr(exc, "problem_mark", None))
         problem = " ".join(str(getattr(exc, "problem", None) or exc).split())
+        if "nesting depth" in problem:  # PyYAML >= 6.0.4 stops deep nesting as it scans
+            raise _too_deep(source, line) from None
         raise YamlDocumentError(source, line, f"not valid YAML: {problem}") from None
 
 
