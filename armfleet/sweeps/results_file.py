@@ -118,7 +118,6 @@ class ResultsWriter:
         self._parquet: pq.ParquetWriter | None = None
         self._stream: ipc.RecordBatchStreamWriter | None = None
         self._sink: pa.OSFile | None = None
-        self._kept = kept
         self.written_seeds: set[int] = set()
         if kept is not None:  # a resumed sweep: its rows first, under the new metadata
             self.written_seeds.update(int(s) for s in kept.column("seed").to_pylist())

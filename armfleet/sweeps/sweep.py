@@ -119,7 +119,7 @@ def sweep(
         integers = frozenset(
             column
             for parameter in definition.randomization
-            if parameter.distribution.is_integer
+            if parameter.distribution.is_integer and parameter.distribution.size == 0
             for column in parameter.columns
         )
         counts, interrupted = RunCounts(), False
