@@ -98,14 +98,13 @@ def check_address(address: str) -> None:
 @contextmanager
 def ray_session(address: str | None, workers: int | None) -> Iterator[RaySession]:
     """Start a private local Ray (``address`` None) with ``workers`` CPUs (default: all
-    cores), or join the cluster at ``address``; shut down or disconnect at the end.
+    cores), or join the cluster at ``address`` (checked by :func:`check_address` first,
+    before anything else starts); shut down or disconnect at the end.
 
     Raises:
-        SweepError: an unreachable address, or ``ray`` already imported without the
-            loopback switch when a local instance is asked for.
+        SweepError: a cluster that refuses the join, or ``ray`` already imported without
+            the loopback switch when a local instance is asked for.
     """
-    if address is not None:
-        check_address(address)
     ray = _import_ray(local=address is None or _is_loopback(address))
     if ray.is_initialized():
         raise SweepError(

@@ -102,7 +102,7 @@ class SweepDriver:
                     self._submit(pending)
                 ready, _ = self._ray.wait(list(self._in_flight), num_returns=1, timeout=0.5)
                 for ref in ready:
-                    self._collect(ref, pending)
+                    self._collect(ref)
                 self._enforce_deadlines(pending)
         except BaseException:
             for ref in list(self._in_flight):
@@ -133,7 +133,7 @@ class SweepDriver:
         ref = self._remote.remote(self._definition_ref, seeds)
         self._in_flight[ref] = _Batch(seeds, now, now + limit, alone)
 
-    def _collect(self, ref: Any, pending: deque[int]) -> None:
+    def _collect(self, ref: Any) -> None:
         began = time.perf_counter()
         batch = self._in_flight.pop(ref)
         try:
