@@ -18,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import armfleet
+from armfleet.arm import Arm
+from armfleet.world import World
 
 GRASP_FROM_CENTRE_M = 0.07  # bob holds the bar's -x end, toby its +x end
 HANDOVER_AT_M = (0.5, 0.0, 0.40)  # the bar's centre while it changes hands
@@ -58,7 +59,7 @@ class Watch:
     arm_contacts: int = 0
     lowest_bar_z_m: float = math.inf
 
-    def __call__(self, world: armfleet.World) -> None:
+    def __call__(self, world: World) -> None:
         self.arm_contacts += "toby" in world.contacts.touching_bodies("bob")
         if self.picked and not self.placed:
             held = world.arm("bob").gripper.holding or world.arm("toby").gripper.holding
@@ -66,7 +67,7 @@ class Watch:
             self.lowest_bar_z_m = min(self.lowest_bar_z_m, world.object("bar").position[2])
 
 
-def hand_over(world: armfleet.World, *, realtime: bool = False) -> Watch:
+def hand_over(world: World, *, realtime: bool = False) -> Watch:
     """Run the handover in ``world`` (launched from handover.yaml); return what was seen."""
     bob, toby = world.arm("bob"), world.arm("toby")
     watch = Watch()
@@ -74,11 +75,11 @@ def hand_over(world: armfleet.World, *, realtime: bool = False) -> Watch:
     def wait(seconds: float) -> None:
         world.run(seconds, realtime=realtime, on_step=watch)
 
-    def go(arm: armfleet.Arm, pose: np.ndarray) -> None:
+    def go(arm: Arm, pose: np.ndarray) -> None:
         """A planned move around everything in the world (the other arm included)."""
         wait(arm.move_to_pose(pose, link="tcp", avoid_collisions=True) + 0.2)
 
-    def straight(arm: armfleet.Arm, pose: np.ndarray) -> None:
+    def straight(arm: Arm, pose: np.ndarray) -> None:
         wait(arm.move_to_pose(pose, link="tcp", linear=True) + 0.2)
 
     def bar() -> np.ndarray:
@@ -122,14 +123,14 @@ def hand_over(world: armfleet.World, *, realtime: bool = False) -> Watch:
     return watch
 
 
-def placement_error_m(world: armfleet.World) -> float:
+def placement_error_m(world: World) -> float:
     """Distance of the bar's centre from its target: the mat's centre, 2.1 cm up [m]."""
     target = lifted(world.tf.lookup("world", "mat"), MAT_TO_BAR_CENTRE_M)[:3, 3]
     return float(np.linalg.norm(world.object("bar").position - target))
 
 
 def handover(
-    world: armfleet.World, rng: np.random.Generator, *, tolerance_m: float = TOLERANCE_M
+    world: World, rng: np.random.Generator, *, tolerance_m: float = TOLERANCE_M
 ) -> dict[str, bool | int | float]:
     """The handover in ``world`` (launched from handover.yaml) as a sweep task.
 
