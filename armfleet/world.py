@@ -61,6 +61,7 @@ from armfleet.synchronised_motion import move_together
 from armfleet.tf_tree import TfTree
 
 if TYPE_CHECKING:
+    from armfleet.foxglove import FoxgloveServer
     from armfleet.recording import Recorder
     from armfleet.spec import FleetSpec
     from armfleet.viewer import Viewer
@@ -143,6 +144,7 @@ class World:
         )
         self._viewer: Viewer | None = None
         self.viewer_error: str | None = None
+        self._foxglove: list[FoxgloveServer] = []  # closed with the world
         if viewer:
             from armfleet.viewer import start_viewer  # meshcat is only loaded when asked for
 
@@ -219,6 +221,31 @@ class World:
         from armfleet.recording import record
 
         return record(self, path, spec=spec, topics=topics)
+
+    def serve_foxglove(self, port: int = 0, *, host: str = "127.0.0.1") -> FoxgloveServer:
+        """Serve this world to Foxglove on ``ws://HOST:PORT`` (docs/foxglove.md).
+
+        Every topic (the recording's schemas, JSON), the arms' URDFs and meshes, and the
+        services ``/move``, ``/move_together``, ``/grip``, ``/reset``. Call it from the
+        thread that steps the world; keep stepping for clients to be served.
+
+        Args:
+            port: TCP port, 0 for a free one (``server.port``); Foxglove proposes 8765.
+            host: address to listen on; anything but loopback lets other machines
+                command the arms.
+
+        Returns:
+            The running :class:`armfleet.foxglove.FoxgloveServer`; close it, or it
+            closes with the world.
+
+        Raises:
+            FoxgloveError: bad host or port, the port is taken, or the world is closed.
+        """
+        from armfleet.foxglove import FoxgloveServer  # foxglove-sdk only loaded when asked for
+
+        server = FoxgloveServer(self, port, host=host)
+        self._foxglove = [s for s in self._foxglove if not s.closed] + [server]
+        return server
 
     def process_requests(self) -> int:
         """Run the submitted requests now (the stepping thread calls this; also when paused)."""
@@ -630,6 +657,8 @@ class World:
             if not now:  # the stepping thread closes it once the step is over
                 return
             try:
+                for server in self._foxglove:  # first: its subscriptions are on the bus
+                    server.close()
                 # First, while the handles still work: its refresher thread reads them.
                 if self._viewer is not None:
                     self._viewer.close()

@@ -1,0 +1,26 @@
+"""Live Foxglove: a world's topics, arms and services in the Foxglove app.
+
+``world.serve_foxglove(port)`` (or ``armfleet spawn ... --foxglove [PORT]``) starts a
+Foxglove WebSocket server (the ``foxglove-sdk`` package's) that publishes every topic
+with the recording's schemas and JSON encoding, serves the arms' URDFs and meshes,
+and offers ``/move``, ``/move_together``, ``/grip`` and ``/reset`` to the Service Call
+panel. See docs/foxglove.md.
+"""
+
+from __future__ import annotations
+
+from armfleet.foxglove.assets import AssetLibrary, urdf_uri
+from armfleet.foxglove.errors import FoxgloveError, ServiceCallError
+from armfleet.foxglove.server import DEFAULT_PORT, FoxgloveServer, serve_foxglove
+from armfleet.foxglove.services import SERVICE_SCHEMAS
+
+__all__ = [
+    "DEFAULT_PORT",
+    "SERVICE_SCHEMAS",
+    "AssetLibrary",
+    "FoxgloveError",
+    "FoxgloveServer",
+    "ServiceCallError",
+    "serve_foxglove",
+    "urdf_uri",
+]
