@@ -10,6 +10,7 @@ import time
 from types import FrameType
 
 from armfleet.cli.api_options import check_api_arguments, start_api
+from armfleet.cli.foxglove_options import start_foxglove
 from armfleet.cli.listen_ports import check_run_ports
 from armfleet.cli.record_option import RunRecording
 from armfleet.cli.status_line import status_line
@@ -64,6 +65,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
             # The API starts once the spec's arms are up: a client's spawn then never
             # lands in the middle of the spec's bring-up.
             run_state = RunState()
+            foxglove = start_foxglove(world, args)  # closed with the world if the API fails
             server = start_api(world, run_state, args)
             try:
                 run_world(
@@ -81,6 +83,8 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
                     f"{time.perf_counter() - started:.2f} s wall in all); shut down cleanly"
                 )
             finally:
+                if foxglove is not None:
+                    foxglove.close()
                 if server is not None:
                     server.close()
         finally:

@@ -29,6 +29,8 @@ _NEW_WORLD_OPTIONS = (
     ("--api-bind", "api_bind", DEFAULT_BIND),
     ("--api-port", "api_port", 0),
     ("--no-api", "no_api", False),
+    ("--foxglove", "foxglove", None),
+    ("--foxglove-bind", "foxglove_bind", DEFAULT_BIND),
 )
 
 

@@ -40,8 +40,8 @@ def check_free(host: str, port: int, option: str, instead: str) -> None:
 
 
 def check_run_ports(args: argparse.Namespace, viewer: bool) -> None:
-    """Check the ``--viewer-port`` (when a viewer is to start) and ``--api-port`` (when the
-    API is served) of a run."""
+    """Check the ``--viewer-port`` (when a viewer is to start), ``--api-port`` (when the
+    API is served) and ``--foxglove`` port of a run."""
     viewer_port: int | None = args.viewer_port if viewer else None
     api_port: int | None = None
     if hasattr(args, "api_port") and not args.no_api:
@@ -52,3 +52,12 @@ def check_run_ports(args: argparse.Namespace, viewer: bool) -> None:
         check_free(LOOPBACK, viewer_port, "--viewer-port", "choose another, or leave it out")
     if api_port:
         check_free(args.api_bind, api_port, "--api-port", "choose another, or 0 for a free one")
+    foxglove_port: int | None = getattr(args, "foxglove", None)
+    if foxglove_port and foxglove_port in (viewer_port, api_port):
+        raise UsageError(
+            f"--foxglove {foxglove_port} is also another server's port; give two ports"
+        )
+    if foxglove_port:
+        check_free(
+            args.foxglove_bind, foxglove_port, "--foxglove", "choose another, or 0 for a free one"
+        )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from armfleet.cli.foxglove_options import add_foxglove_arguments, check_foxglove_arguments
 from armfleet.cli.number_arguments import port, run_duration
 from armfleet.cli.parser import OneLineParser
 from armfleet.cli.path_arguments import path_text
@@ -31,9 +32,11 @@ def add_run_arguments(parser: OneLineParser) -> None:
     )  # fmt: skip
     parser.add_argument("--record", type=path_text, metavar=METAVAR, default=None, help=HELP)
     parser.add_argument("--quiet", action="store_true", help="no progress or status lines")
+    add_foxglove_arguments(parser)
 
 
 def check_run_arguments(args: argparse.Namespace) -> None:
     """Raise :class:`UsageError` for run options that make no sense (the numbers were
     checked while parsing)."""
     check_record_path(args.record)
+    check_foxglove_arguments(args)
