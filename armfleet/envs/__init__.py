@@ -1,0 +1,54 @@
+"""Learning environments on armfleet worlds: Gymnasium and PettingZoo (docs/envs.md).
+
+>>> import gymnasium as gym
+>>> import armfleet.envs
+>>> env = gym.make("armfleet/Reach-v0", arm_count=2)
+
+Importing this package registers ``armfleet/Reach-v0`` and ``armfleet/Handover-v0``;
+``import armfleet`` alone does not load it (nor Gymnasium).
+"""
+
+from armfleet.envs.actions import ActionKind, StepLimits
+from armfleet.envs.arm_commander import ArmCommander
+from armfleet.envs.errors import EnvError, EnvNotReset, InvalidAction, InvalidOption
+from armfleet.envs.multi_arm_env import MultiArmEnv
+from armfleet.envs.parallel_env import MultiArmParallelEnv
+from armfleet.envs.registration import HANDOVER_ID, REACH_ID, register_envs
+from armfleet.envs.rendering import RenderMode
+from armfleet.envs.shipped_envs import HandoverEnv, ReachEnv
+from armfleet.envs.stop_policy import StopPolicy
+from armfleet.envs.tasks import (
+    Evaluation,
+    HandoverTask,
+    ReachTask,
+    RewardKind,
+    SceneTask,
+    Task,
+)
+
+register_envs()
+
+__all__ = [
+    "HANDOVER_ID",
+    "REACH_ID",
+    "ActionKind",
+    "ArmCommander",
+    "EnvError",
+    "EnvNotReset",
+    "Evaluation",
+    "HandoverEnv",
+    "HandoverTask",
+    "InvalidAction",
+    "InvalidOption",
+    "MultiArmEnv",
+    "MultiArmParallelEnv",
+    "ReachEnv",
+    "ReachTask",
+    "RenderMode",
+    "RewardKind",
+    "SceneTask",
+    "StepLimits",
+    "StopPolicy",
+    "Task",
+    "register_envs",
+]

@@ -1,0 +1,56 @@
+"""The registered environments: Reach and Handover as :class:`MultiArmEnv` classes, so
+that ``gymnasium.make`` finds their metadata."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from armfleet.envs.actions import ActionKind
+from armfleet.envs.multi_arm_env import MultiArmEnv
+from armfleet.envs.tasks.handover_task import HandoverTask, RewardKind
+from armfleet.envs.tasks.reach_task import ReachTask
+from armfleet.spec import FleetSpec
+from armfleet.sweeps.scenarios.handover import TOLERANCE_M
+
+
+class ReachEnv(MultiArmEnv):
+    """``armfleet/Reach-v0``: ``arm_count`` Pandas reach random targets
+    (:class:`~armfleet.envs.tasks.ReachTask`); joint-delta actions by default.
+
+    Args:
+        arm_count, spacing_m, tolerance_m: of the task.
+        **options: of :class:`MultiArmEnv`.
+    """
+
+    def __init__(
+        self,
+        arm_count: int = 2,
+        spacing_m: float = 1.0,
+        tolerance_m: float = 0.02,
+        **options: Any,
+    ) -> None:
+        options.setdefault("action_kind", ActionKind.JOINT_DELTAS)
+        super().__init__(ReachTask(arm_count, spacing_m, tolerance_m), **options)
+
+
+class HandoverEnv(MultiArmEnv):
+    """``armfleet/Handover-v0``: bob hands the bar to toby, who puts it on the mat
+    (:class:`~armfleet.envs.tasks.HandoverTask`); tool-delta actions by default.
+
+    Args:
+        reward: ``"dense"`` or ``"sparse"``.
+        tolerance_m: of the task's success [m].
+        spec: the scene (``handover`` by default).
+        **options: of :class:`MultiArmEnv`.
+    """
+
+    def __init__(
+        self,
+        reward: RewardKind | str = RewardKind.DENSE,
+        tolerance_m: float = TOLERANCE_M,
+        spec: FleetSpec | str | Path = "handover",
+        **options: Any,
+    ) -> None:
+        options.setdefault("action_kind", ActionKind.TOOL_DELTA)
+        super().__init__(HandoverTask(reward, tolerance_m, spec), **options)

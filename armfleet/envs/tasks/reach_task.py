@@ -1,0 +1,115 @@
+"""Reach: a row of Pandas, each sent to a random reachable tool0 pose.
+
+The scene is the Reach sweep's (:mod:`armfleet.sweeps.scenarios.reach`): ``arm_count``
+Pandas ``arm0``, ``arm1``, ... along x, ``spacing_m`` apart, facing +y. At reset each arm
+gets one target drawn with the episode's generator
+(:func:`~armfleet.sweeps.scenarios.reach_targets.draw_row_targets`: the tool0 pose of a
+random joint configuration clear of the limits, the floor and the arm itself).
+Reward: minus the sum over arms of tool0's distance to its target's position [m] (dense);
+success once every tool0 is within ``tolerance_m`` of its target's position.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium import spaces
+
+from armfleet.checks.real_numbers import real_number
+from armfleet.envs.errors import InvalidOption
+from armfleet.envs.observations import pose_space
+from armfleet.envs.poses import pose_vector
+from armfleet.envs.tasks.task import Evaluation, Task
+from armfleet.messages import FloatArray
+from armfleet.spawn_pose import SpawnPose
+from armfleet.spec import FleetSpec
+from armfleet.spec.fleet_spec import ArmSpec, WorldSpec
+from armfleet.sweeps.scenarios.reach import FACING_DEG, MODEL
+from armfleet.sweeps.scenarios.reach_targets import draw_row_targets
+from armfleet.world import World
+
+#: Arms a Reach environment takes.
+MAX_ARMS = 8
+
+
+class ReachTask(Task):
+    """N Pandas reach random targets (see the module docstring).
+
+    Args:
+        arm_count: Pandas in the row, 1 to :data:`MAX_ARMS`.
+        spacing_m: distance between neighbouring bases [m], in [0.5, 5].
+        tolerance_m: a target is reached within this distance [m], in (0, 0.5].
+        limit_margin: fraction of each joint's range the drawn configurations keep clear.
+        min_tool_height_m: lowest tool0 height of a target [m].
+    """
+
+    def __init__(
+        self,
+        arm_count: int = 2,
+        spacing_m: float = 1.0,
+        tolerance_m: float = 0.02,
+        limit_margin: float = 0.1,
+        min_tool_height_m: float = 0.1,
+    ) -> None:
+        if isinstance(arm_count, bool) or not isinstance(arm_count, int | np.integer):
+            raise InvalidOption("arm_count", arm_count, f"a whole number in [1, {MAX_ARMS}]")
+        if not 1 <= arm_count <= MAX_ARMS:
+            raise InvalidOption("arm_count", arm_count, f"a whole number in [1, {MAX_ARMS}]")
+        self.arm_count = int(arm_count)
+        self.spacing_m = real_number(
+            spacing_m, "spacing_m", "a distance in [0.5, 5] m", low=0.5, high=5.0
+        )
+        self.tolerance_m = real_number(
+            tolerance_m, "tolerance_m", "a distance in (0, 0.5] m", low=1e-6, high=0.5
+        )
+        self.limit_margin = limit_margin
+        self.min_tool_height_m = min_tool_height_m
+        self.arms = tuple(f"arm{i}" for i in range(self.arm_count))
+        self._targets: dict[str, FloatArray] = {}
+
+    @property
+    def name(self) -> str:
+        return f"reach with {self.arm_count} arm{'s' * (self.arm_count > 1)}"
+
+    def spec(self) -> FleetSpec:
+        arms = tuple(
+            ArmSpec(name, MODEL, SpawnPose(x=i * self.spacing_m, yaw_deg=FACING_DEG))
+            for i, name in enumerate(self.arms)
+        )
+        return FleetSpec(WorldSpec(realtime=False, viewer=False), arms, source="reach task")
+
+    @property
+    def targets(self) -> dict[str, FloatArray]:
+        """Each arm's target this episode: a 4x4 world pose of tool0."""
+        return {name: pose.copy() for name, pose in self._targets.items()}
+
+    def reset(self, world: World, rng: np.random.Generator) -> None:
+        arms = [world.arm(name) for name in self.arms]
+        drawn = draw_row_targets(
+            arms, rng, 1, limit_margin=self.limit_margin, min_tool_height_m=self.min_tool_height_m
+        )
+        self._targets = {name: targets[0].pose for name, targets in drawn.items()}
+
+    def arm_spaces(self, arm: str) -> dict[str, spaces.Box]:
+        del arm
+        return {"target_pose": pose_space()}
+
+    def observe(self, world: World, arm: str) -> dict[str, FloatArray]:
+        del world
+        return {"target_pose": pose_vector(self._targets[arm])}
+
+    def distances(self, world: World) -> dict[str, float]:
+        """Each arm's tool0 distance to its target's position [m]."""
+        return {
+            name: float(
+                np.linalg.norm(
+                    world.tf.lookup("world", world.arm(name).description.tool0)[:3, 3]
+                    - target[:3, 3]
+                )
+            )
+            for name, target in self._targets.items()
+        }
+
+    def evaluate(self, world: World) -> Evaluation:
+        distances = self.distances(world)
+        success = all(d <= self.tolerance_m for d in distances.values())
+        return Evaluation(-sum(distances.values()), success, {"distance_m": distances})
