@@ -77,7 +77,7 @@ def test_pettingzoo_checker_passes_with_one_agent_per_arm() -> None:
     assert env.possible_agents == ["bob", "toby"]
     # Two episodes of up to 1,000 cycles each, random actions for every live agent.
     parallel_api_test(env, num_cycles=ROLLOUT_STEPS)
-    assert env.observation_space("bob") is env.env.observation_space["bob"]
+    assert env.observation_space("bob") is env.env.arm_observation_space("bob")
     assert env.action_space("toby").contains(env.action_space("toby").sample())
     env.close()
 
@@ -105,7 +105,7 @@ def test_a_thousand_random_parallel_steps_run() -> None:
         actions = {agent: env.action_space(agent).sample() for agent in env.agents}
         observations, rewards, terminated, truncated, _ = env.step(actions)
         for agent, observation in observations.items():
-            assert observation in env.observation_space(agent)
+            assert env.observation_space(agent).contains(observation)
         assert len(set(rewards.values())) == 1  # the team shares the reward
         if not env.agents:
             assert all(terminated.values()) or all(truncated.values())
@@ -181,7 +181,9 @@ def test_wrong_shapes_and_types_are_refused_out_of_box_values_clipped(
     action = {**good, "arm0": {**good["arm0"], "joint_deltas": np.full(7, 5.0)}}
     _, _, _, _, info = reach.step(action)
     assert info["clipped"] == ["arm0.joint_deltas"]
-    step = float(reach.arm_action_space("arm0")["joint_deltas"].high[0])  # 0.05 rad
+    box = reach.arm_action_space("arm0")["joint_deltas"]
+    assert isinstance(box, gym.spaces.Box)
+    step = float(box.high[0])  # 0.05 rad
     upper = reach.world.arm("arm0").joint_limits[1]
     np.testing.assert_array_equal(reach.commander("arm0").target, np.minimum(before + step, upper))
 
