@@ -9,10 +9,14 @@ from __future__ import annotations
 # ruff: noqa: I001 - armfleet comes first: it imports PyBullet without its banner
 import armfleet
 
+import json
 import math
 import re
+import subprocess
+import sys
 import threading
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -36,6 +40,7 @@ from armfleet.envs import (
     ReachTask,
 )
 
+ROOT = Path(__file__).resolve().parents[1]
 #: Environment steps of the random rollouts.
 ROLLOUT_STEPS = 1000
 
@@ -296,9 +301,6 @@ def test_resets_leave_no_pybullet_client_or_thread_behind(reach: MultiArmEnv) ->
 
 
 def test_import_armfleet_does_not_load_the_environments() -> None:
-    import subprocess
-    import sys
-
     code = "import sys, armfleet; print('armfleet.envs' in sys.modules, 'gymnasium' in sys.modules)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.split() == ["False", "False"]
@@ -310,3 +312,18 @@ def test_every_public_name_resolves() -> None:
     for name in armfleet.envs.__all__:
         assert getattr(armfleet.envs, name) is not None
     assert ActionKind("tool_delta") is ActionKind.TOOL_DELTA
+
+
+def test_the_benchmark_short_mode_writes_every_figure(tmp_path: Path) -> None:
+    out = tmp_path / "envs.json"
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "envs.py"), "--short", "--json", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    rows = json.loads(out.read_text())["rows"]
+    assert [(row["arms"], row["control_period"]) for row in rows] == [(2, 1), (2, 10)]
+    for row in rows:
+        assert row["env_steps_per_s"] > 0 and row["raw_physics_steps_per_s"] > 0
+        assert row["env_over_raw"] > 0  # a timing: reported, never asserted
+    assert "env/raw" in done.stdout

@@ -135,26 +135,30 @@ def check_arm_action(
     for field in fields:
         box = space.spaces[field]
         assert isinstance(box, spaces.Box)
-        valid = f"{box.shape[0]} finite numbers in [{_bounds(box)}]"
         raw = action[field]
         try:
             raw_array = np.asarray(raw)
         except (TypeError, ValueError):  # ragged
-            raise InvalidAction(arm, field, f"got {type(raw).__name__}", valid) from None
+            raise InvalidAction(arm, field, f"got {type(raw).__name__}", _valid(box)) from None
         if raw_array.dtype.kind not in "fiu":  # not text, bool, None or objects
-            raise InvalidAction(arm, field, f"got {raw_array.dtype} values", valid)
+            raise InvalidAction(arm, field, f"got {raw_array.dtype} values", _valid(box))
         array = raw_array.astype(np.float64)
         if array.shape != box.shape:
-            raise InvalidAction(arm, field, f"got shape {array.shape}", valid)
+            raise InvalidAction(arm, field, f"got shape {array.shape}", _valid(box))
         bad = np.flatnonzero(~np.isfinite(array))
         if bad.size:
-            raise InvalidAction(arm, field, f"element {bad[0]} is {array[bad[0]]}", valid)
+            raise InvalidAction(arm, field, f"element {bad[0]} is {array[bad[0]]}", _valid(box))
         low, high = box.low.astype(np.float64), box.high.astype(np.float64)
         inside = np.clip(array, low, high)
         if not np.array_equal(inside, array):
             clipped.append(f"{arm}.{field}")
         values[field] = inside
     return values, clipped
+
+
+def _valid(box: spaces.Box) -> str:
+    """What a value of ``box`` is, for an error message."""
+    return f"{box.shape[0]} finite numbers in [{_bounds(box)}]"
 
 
 def _bounds(box: spaces.Box) -> str:

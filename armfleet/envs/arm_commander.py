@@ -41,7 +41,7 @@ class ArmCommander:
         self._kind = kind
         self._lower, self._upper = arm.joint_limits
         self._target = arm.positions
-        self._tool_target = world.tf.lookup("world", arm.description.tool0)
+        self._tool_target = world.tf.world_pose(arm.description.tool0)
         #: Whether the fingers were last told to close; None before the first command.
         self._closed: bool | None = None
 
@@ -58,7 +58,7 @@ class ArmCommander:
     def rebase(self) -> None:
         """Take the arm's measured joints and tool0 as the targets (after a stop)."""
         self._target = self._arm.positions
-        self._tool_target = self._world.tf.lookup("world", self._arm.description.tool0)
+        self._tool_target = self._world.tf.world_pose(self._arm.description.tool0)
 
     def apply(self, action: dict[str, FloatArray]) -> str:
         """Send ``action`` (checked and clipped); returns "" or why the arm target was

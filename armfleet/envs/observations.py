@@ -76,7 +76,7 @@ class ArmObserver:
         values: dict[str, object] = {
             "joint_positions": arm.body.position[indices],
             "joint_velocities": arm.body.velocity[indices],
-            "tool_pose": pose_vector(world.tf.lookup("world", arm.description.tool0)),
+            "tool_pose": pose_vector(world.tf.world_pose(arm.description.tool0)),
         }
         if self._has_gripper:
             values["gripper_width"] = np.array([arm.gripper.width])

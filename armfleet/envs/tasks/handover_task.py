@@ -106,7 +106,7 @@ class HandoverTask(Task):
     @staticmethod
     def goal(world: World) -> FloatArray:
         """Where the bar's centre rests on the mat's centre [m]."""
-        goal: FloatArray = world.tf.lookup("world", MAT)[:3, 3].copy()
+        goal: FloatArray = world.tf.world_pose(MAT)[:3, 3].copy()
         goal[2] += MAT_TO_BAR_CENTRE_M
         return goal
 
@@ -115,7 +115,7 @@ class HandoverTask(Task):
         centre = bar.position
         to_goal = float(np.linalg.norm(centre - self.goal(world)))
         reach = min(
-            float(np.linalg.norm(world.tf.lookup("world", f"{name}_tcp")[:3, 3] - centre))
+            float(np.linalg.norm(world.tf.world_pose(f"{name}_tcp")[:3, 3] - centre))
             for name in ARMS
         )
         held = any(world.arm(name).gripper.holding for name in ARMS)

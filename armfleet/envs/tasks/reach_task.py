@@ -102,8 +102,7 @@ class ReachTask(Task):
         return {
             name: float(
                 np.linalg.norm(
-                    world.tf.lookup("world", world.arm(name).description.tool0)[:3, 3]
-                    - target[:3, 3]
+                    world.tf.world_pose(world.arm(name).description.tool0)[:3, 3] - target[:3, 3]
                 )
             )
             for name, target in self._targets.items()
