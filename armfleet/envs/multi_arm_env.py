@@ -263,9 +263,12 @@ class MultiArmEnv(gym.Env[Observation, Action]):
             **evaluation.info,
         }
 
+    def __str__(self) -> str:
+        return repr(self)
+
     def __repr__(self) -> str:
         return (
-            f"MultiArmEnv({self._task.name}, arms={self.arm_names}, "
+            f"{type(self).__name__}({self._task.name}, arms={self.arm_names}, "
             f"action_kind={self._kind.value!r}, control_period={self._period})"
         )
 
