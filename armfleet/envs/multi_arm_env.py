@@ -102,6 +102,7 @@ class MultiArmEnv(gym.Env[Observation, Action]):
             spec, world=dataclasses.replace(spec.world, viewer=mode is RenderMode.HUMAN)
         )
         self._models = ModelLibrary()  # every episode's arms from one library
+        self._viewer_port: int | None = None
         self._world = self._launch()
         arms = list(self._world.arms.values())
         if not arms:
@@ -233,12 +234,15 @@ class MultiArmEnv(gym.Env[Observation, Action]):
 
     # -- the rest ------------------------------------------------------------------------
     def _launch(self) -> World:
-        world = launch(self._spec, models=self._models)
+        # Every episode's viewer on the first one's port: the page stays where it is.
+        world = launch(self._spec, models=self._models, viewer_port=self._viewer_port)
         if self._spec.world.viewer:
             if world.viewer is None:
                 logger.warning("render_mode='human': no viewer (%s)", world.viewer_error)
             else:
-                logger.info("viewer at %s", world.viewer.url)
+                if self._viewer_port is None:
+                    logger.info("viewer at %s", world.viewer.url)
+                self._viewer_port = world.viewer.port
         return world
 
     def _observe(self) -> Observation:
