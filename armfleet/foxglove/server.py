@@ -43,6 +43,8 @@ logger = logging.getLogger("armfleet")
 DEFAULT_PORT = 8765
 #: Messages queued per client before the oldest are dropped.
 BACKLOG_MESSAGES = 1024
+#: Longest wait for the server to stop [s].
+STOP_WAIT_S = 2.0
 #: Name the server gives itself to its clients.
 SERVER_NAME = "armfleet"
 
@@ -182,10 +184,24 @@ class FoxgloveServer:
                 return
             self._closed = True
         try:
-            if self._server is not None:
-                self._server.stop()
-        finally:
             self._channels.close()
+        finally:
+            if self._server is not None:
+                self._stop(self._server)
+
+    @staticmethod
+    def _stop(server: WebSocketServer) -> None:
+        """Stop ``server``, waiting at most :data:`STOP_WAIT_S`: the SDK waits for every
+        client to take its close frame, and one that does not read held a stop ~45 s
+        (until its connection timed out). It goes on stopping in the background."""
+        stopping = threading.Thread(target=server.stop, name="armfleet-foxglove-stop", daemon=True)
+        stopping.start()
+        stopping.join(STOP_WAIT_S)
+        if stopping.is_alive():
+            logger.warning(
+                "foxglove: a client that does not read holds the server's shutdown; it ends "
+                "when that connection times out"
+            )
 
     def __enter__(self) -> FoxgloveServer:
         return self
