@@ -142,11 +142,20 @@ def _read_allowed(path: str) -> bytes | None:
         if os.path.realpath(path) != path:  # a folder or the file became a symlink
             logger.warning("foxglove: refused %s: it is now a link elsewhere", path)
             return None
-        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0))
+        # Non-blocking: opening a FIFO put in the file's place must not wait for a writer.
+        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
     except OSError:
         return None
-    with os.fdopen(descriptor, "rb") as file:
-        info = os.fstat(file.fileno())
+    try:
+        info = os.fstat(descriptor)
         if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_ASSET_BYTES:
             return None
-        return file.read(MAX_ASSET_BYTES + 1)[:MAX_ASSET_BYTES]
+        chunks, left = [], info.st_size
+        while left > 0 and (chunk := os.read(descriptor, min(left, 1 << 20))):
+            chunks.append(chunk)
+            left -= len(chunk)
+        return b"".join(chunks)
+    except OSError:
+        return None
+    finally:
+        os.close(descriptor)
