@@ -15,7 +15,7 @@ import re
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -45,22 +45,53 @@ ROOT = Path(__file__).resolve().parents[1]
 ROLLOUT_STEPS = 1000
 
 
-def random_rollout(env: gym.Env[Any, Any], steps: int, seed: int) -> tuple[int, float]:
+def random_rollout(env: MultiArmEnv, steps: int, seed: int, nan_in: tuple[str, str]) -> float:
     """``steps`` random actions, resetting when an episode ends; every observation must lie
-    in the observation space and every reward be finite. Returns (episodes ended, the
-    simulated time of the last episode [s])."""
+    in the observation space and every reward be finite. Halfway, an action with a NaN in
+    ``nan_in`` (arm, entry) must be refused with nothing changed. Returns the simulated
+    time of the last episode [s]."""
     env.action_space.seed(seed)
     observation, _ = env.reset(seed=seed)
-    ended = 0
-    for _ in range(steps):
+    for index in range(steps):
+        if index == steps // 2:
+            assert_nan_refused(env, env.step, env.action_space.sample(), *nan_in)
         observation, reward, terminated, truncated, info = env.step(env.action_space.sample())
         assert observation in env.observation_space
         assert math.isfinite(float(reward))
         assert set(info) >= {"success", "stopped", "refused", "clipped", "time_s"}
         if terminated or truncated:
-            ended += 1
             observation, _ = env.reset()
-    return ended, float(env.unwrapped.world.time)  # type: ignore[attr-defined]
+    return env.world.time
+
+
+def state(env: MultiArmEnv) -> list[Any]:
+    """Time, every joint, every object's pose and every arm's targets."""
+    world = env.world
+    return [
+        world.time,
+        [arm.body.position.copy() for arm in world.arms.values()],
+        [arm.body.velocity.copy() for arm in world.arms.values()],
+        [obj.pose for obj in world.objects.values()],
+        [env.commander(name).target for name in env.arm_names],
+        [env.commander(name).tool_target for name in env.arm_names],
+    ]
+
+
+def assert_nan_refused(
+    env: MultiArmEnv, step: Callable[[Any], object], action: Any, arm: str, entry: str
+) -> None:
+    """A NaN in ``action[arm][entry]`` raises one line naming them and what is valid, and
+    leaves the episode as it was."""
+    before = state(env)
+    action[arm][entry][0] = np.nan
+    with pytest.raises(InvalidAction) as refused:
+        step(action)
+    message = str(refused.value)
+    assert isinstance(refused.value, armfleet.ArmfleetError)
+    assert (refused.value.arm, refused.value.field) == (arm, entry)
+    assert "\n" not in message and f"action[{arm!r}][{entry!r}]: element 0 is nan" in message
+    assert "valid: " in message and "finite numbers in [" in message
+    assert gym.utils.env_checker.data_equivalence(state(env), before, exact=True)
 
 
 @pytest.fixture(scope="module")
@@ -88,14 +119,12 @@ def test_pettingzoo_checker_passes_with_one_agent_per_arm() -> None:
 
 
 def test_a_thousand_random_reach_steps_run(reach: MultiArmEnv) -> None:
-    _, time_s = random_rollout(reach, ROLLOUT_STEPS, seed=4)
-    assert time_s > 0
+    assert random_rollout(reach, ROLLOUT_STEPS, seed=4, nan_in=("arm1", "joint_deltas")) > 0
 
 
 def test_a_thousand_random_handover_steps_run() -> None:
     env = HandoverEnv(control_period=2)  # tool-delta actions: IK every step
-    _, time_s = random_rollout(env, ROLLOUT_STEPS, seed=5)
-    assert time_s > 0
+    assert random_rollout(env, ROLLOUT_STEPS, seed=5, nan_in=("toby", "gripper")) > 0
     env.close()
 
 
@@ -106,8 +135,12 @@ def test_a_thousand_random_parallel_steps_run() -> None:
     for agent in env.possible_agents:
         env.action_space(agent).seed(6)
     episodes = 0
-    for _ in range(ROLLOUT_STEPS):
+    for index in range(ROLLOUT_STEPS):
         actions = {agent: env.action_space(agent).sample() for agent in env.agents}
+        if index == ROLLOUT_STEPS // 2:
+            spoilt = {agent: env.action_space(agent).sample() for agent in env.agents}
+            assert_nan_refused(env.env, env.step, spoilt, "arm2", "joint_deltas")
+            assert env.agents == env.possible_agents  # nobody was dropped
         observations, rewards, terminated, truncated, _ = env.step(actions)
         for agent, observation in observations.items():
             assert env.observation_space(agent).contains(observation)
@@ -120,34 +153,15 @@ def test_a_thousand_random_parallel_steps_run() -> None:
     env.close()
 
 
-def state(env: MultiArmEnv) -> tuple[float, list[np.ndarray], list[np.ndarray]]:
-    world = env.world
-    return (
-        world.time,
-        [arm.body.position.copy() for arm in world.arms.values()],
-        [env.commander(name).target for name in env.arm_names],
-    )
-
-
-def test_a_nan_action_is_refused_in_one_line_and_nothing_happens(reach: MultiArmEnv) -> None:
+def test_a_nan_action_is_refused_in_one_line_and_the_episode_goes_on(
+    reach: MultiArmEnv,
+) -> None:
     reach.reset(seed=1)
     reach.step(reach.action_space.sample())
-    before = state(reach)
-    action = reach.action_space.sample()
-    action["arm1"]["joint_deltas"][3] = np.nan
-    with pytest.raises(InvalidAction) as refused:
-        reach.step(action)
-    message = str(refused.value)
-    assert isinstance(refused.value, armfleet.ArmfleetError)
-    assert "\n" not in message and "arm1" in message and "joint_deltas" in message
-    assert "nan" in message and "valid: 7 finite numbers" in message
-    assert (refused.value.arm, refused.value.field) == ("arm1", "joint_deltas")
-    after = state(reach)
-    assert after[0] == before[0]  # no time passed
-    for a, b in zip(after[1] + after[2], before[1] + before[2], strict=True):
-        np.testing.assert_array_equal(a, b)  # no joint moved, no target changed
-    reach.step(reach.action_space.sample())  # and the episode goes on
-    assert reach.world.time > before[0]
+    before = reach.world.time
+    assert_nan_refused(reach, reach.step, reach.action_space.sample(), "arm1", "joint_deltas")
+    reach.step(reach.action_space.sample())
+    assert reach.world.time > before
 
 
 @pytest.mark.parametrize(
@@ -222,6 +236,17 @@ def test_reset_with_a_seed_repeats_the_episode_exactly(reach: MultiArmEnv) -> No
     rollout(reach, seed=12, steps=10)  # something else in between
     second = rollout(reach, seed=11, steps=100)
     assert gym.utils.env_checker.data_equivalence(first, second, exact=True)
+
+
+def test_a_seeded_handover_repeats_exactly_ik_and_grasps_included() -> None:
+    env = HandoverEnv(control_period=10, on_stop="reset")  # tool deltas: IK every step
+    first = rollout(env, seed=7, steps=60)
+    second = rollout(env, seed=7, steps=60)
+    other = rollout(env, seed=8, steps=1)
+    env.close()
+    assert gym.utils.env_checker.data_equivalence(first, second, exact=True)
+    bar = [trace[0]["bob"]["objects"]["bar"] for trace in (first, other)]
+    assert np.linalg.norm(bar[0][:2] - bar[1][:2]) > 1e-4  # the bar starts elsewhere
 
 
 def test_different_seeds_draw_different_targets(reach: MultiArmEnv) -> None:
