@@ -29,6 +29,7 @@ from pettingzoo.test import parallel_api_test
 from armfleet.envs import (
     HANDOVER_ID,
     REACH_ID,
+    SCENE_ID,
     ActionKind,
     HandoverEnv,
     HandoverTask,
@@ -114,6 +115,11 @@ def test_pettingzoo_checker_passes_with_one_agent_per_arm() -> None:
     # Two episodes of up to 1,000 cycles each, random actions for every live agent.
     parallel_api_test(env, num_cycles=ROLLOUT_STEPS)
     assert env.observation_space("bob") is env.env.arm_observation_space("bob")
+    observations, _ = env.reset(seed=3)
+    state = env.state()  # every arm's observation in one vector
+    assert state in env.state_space
+    bob = np.asarray(gym.spaces.flatten(env.observation_space("bob"), observations["bob"]))
+    np.testing.assert_array_equal(state[: bob.size], bob)
     assert env.action_space("toby").contains(env.action_space("toby").sample())
     env.close()
 
@@ -310,8 +316,11 @@ def test_human_mode_opens_the_viewer_and_any_spec_makes_an_env() -> None:
     env.close()
     assert env.world.closed
     env.close()  # again: nothing happens
-    plain = MultiArmEnv("bob_and_toby")
-    assert plain.world.viewer is None  # bob_and_toby.yaml asks for one; only "human" gets it
+    plain = gym.make(SCENE_ID, spec="bob_and_toby")
+    plain.reset(seed=0)
+    assert plain.unwrapped.world.viewer is None  # type: ignore[attr-defined]
+    # (bob_and_toby.yaml asks for a viewer; only "human" gets one.) No task: reward 0.
+    assert plain.step(plain.action_space.sample())[1:4] == (0.0, False, False)
     plain.close()
 
 

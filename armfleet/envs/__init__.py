@@ -4,8 +4,9 @@
 >>> import armfleet.envs
 >>> env = gym.make("armfleet/Reach-v0", arm_count=2)
 
-Importing this package registers ``armfleet/Reach-v0`` and ``armfleet/Handover-v0``;
-``import armfleet`` alone does not load it (nor Gymnasium).
+Importing this package registers ``armfleet/Reach-v0``, ``armfleet/Handover-v0`` and
+``armfleet/Scene-v0`` (any launch spec); ``import armfleet`` alone does not load it (nor
+Gymnasium).
 """
 
 from armfleet.envs.actions import ActionKind, StepLimits
@@ -13,9 +14,9 @@ from armfleet.envs.arm_commander import ArmCommander
 from armfleet.envs.errors import EnvError, EnvNotReset, InvalidAction, InvalidOption
 from armfleet.envs.multi_arm_env import MultiArmEnv
 from armfleet.envs.parallel_env import MultiArmParallelEnv
-from armfleet.envs.registration import HANDOVER_ID, REACH_ID, register_envs
+from armfleet.envs.registration import HANDOVER_ID, REACH_ID, SCENE_ID, register_envs
 from armfleet.envs.rendering import RenderMode
-from armfleet.envs.shipped_envs import HandoverEnv, ReachEnv
+from armfleet.envs.shipped_envs import HandoverEnv, ReachEnv, SceneEnv
 from armfleet.envs.stop_policy import StopPolicy
 from armfleet.envs.tasks import (
     Evaluation,
@@ -31,6 +32,7 @@ register_envs()
 __all__ = [
     "HANDOVER_ID",
     "REACH_ID",
+    "SCENE_ID",
     "ActionKind",
     "ArmCommander",
     "EnvError",
@@ -46,6 +48,7 @@ __all__ = [
     "ReachTask",
     "RenderMode",
     "RewardKind",
+    "SceneEnv",
     "SceneTask",
     "StepLimits",
     "StopPolicy",

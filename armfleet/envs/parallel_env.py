@@ -4,7 +4,8 @@ Each agent's action and observation are its arm's entries of
 :class:`~armfleet.envs.MultiArmEnv`'s ``Dict`` spaces (the very same space objects). The
 task's reward is shared: every agent gets it (a cooperative team). All agents end
 together: on success, on a protective stop (with ``on_stop="terminate"``), or truncated
-after ``max_cycles`` steps; ``agents`` is then empty until the next reset.
+after ``max_cycles`` steps; ``agents`` is then empty until the next reset. ``state()``
+is every arm's observation in one vector.
 """
 
 from __future__ import annotations
@@ -48,6 +49,10 @@ class MultiArmParallelEnv(ParallelEnv[str, AgentObservation, AgentAction]):  # t
         if isinstance(max_cycles, bool) or not isinstance(max_cycles, int) or max_cycles < 1:
             raise InvalidOption("max_cycles", max_cycles, "a whole number >= 1")
         self._env = MultiArmEnv(task, **options)
+        #: Every arm's observation in one float32 vector (``state()``), e.g. for a
+        #: centralised critic: Gymnasium's ``flatten_space`` of the whole ``Dict``.
+        self.state_space = spaces.flatten_space(self._env.observation_space)
+        self._observation: dict[str, AgentObservation] | None = None
         self.render_mode = self._env.render_mode
         self.possible_agents = self._env.arm_names
         self.agents: list[str] = []
@@ -72,6 +77,7 @@ class MultiArmParallelEnv(ParallelEnv[str, AgentObservation, AgentAction]):  # t
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, AgentObservation], dict[str, dict[str, Any]]]:
         observation, info = self._env.reset(seed=seed, options=options)
+        self._observation = observation
         self.agents = list(self.possible_agents)
         self._cycles = 0
         return observation, {agent: dict(info) for agent in self.agents}
@@ -92,6 +98,7 @@ class MultiArmParallelEnv(ParallelEnv[str, AgentObservation, AgentAction]):  # t
         if not self.agents:
             raise EnvNotReset("step (the episode has ended, or not begun)")
         observation, reward, terminated, _, info = self._env.step(actions)
+        self._observation = observation
         self._cycles += 1
         truncated = not terminated and self._cycles >= self.max_cycles
         acting = self.agents
@@ -104,6 +111,17 @@ class MultiArmParallelEnv(ParallelEnv[str, AgentObservation, AgentAction]):  # t
             {agent: truncated for agent in acting},
             {agent: dict(info) for agent in acting},
         )
+
+    def state(self) -> npt.NDArray[np.float32]:
+        """The latest observation of every arm, flattened into :attr:`state_space`.
+
+        Raises:
+            EnvNotReset: before the first reset.
+        """
+        if self._observation is None:
+            raise EnvNotReset("state")
+        flat = np.asarray(spaces.flatten(self._env.observation_space, self._observation))
+        return flat.astype(np.float32)
 
     def render(self) -> npt.NDArray[np.uint8] | None:
         return self._env.render()

@@ -1,5 +1,5 @@
-"""The registered environments: Reach and Handover as :class:`MultiArmEnv` classes, so
-that ``gymnasium.make`` finds their metadata."""
+"""The registered environments: Reach, Handover and any spec as :class:`MultiArmEnv`
+classes, so that ``gymnasium.make`` finds their metadata."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from armfleet.envs.actions import ActionKind
 from armfleet.envs.multi_arm_env import MultiArmEnv
 from armfleet.envs.tasks.handover_task import HandoverTask, RewardKind
 from armfleet.envs.tasks.reach_task import ReachTask
+from armfleet.envs.tasks.task import SceneTask
 from armfleet.spec import FleetSpec
 from armfleet.sweeps.scenarios.handover import TOLERANCE_M
 
@@ -54,3 +55,16 @@ class HandoverEnv(MultiArmEnv):
     ) -> None:
         options.setdefault("action_kind", ActionKind.TOOL_DELTA)
         super().__init__(HandoverTask(reward, tolerance_m, spec), **options)
+
+
+class SceneEnv(MultiArmEnv):
+    """``armfleet/Scene-v0``: the arms of any launch spec, reward 0, no success
+    (:class:`~armfleet.envs.tasks.SceneTask`); joint-delta actions by default.
+
+    Args:
+        spec: a spec, a path, or a shipped spec's name (``bob_and_toby`` by default).
+        **options: of :class:`MultiArmEnv`.
+    """
+
+    def __init__(self, spec: FleetSpec | str | Path = "bob_and_toby", **options: Any) -> None:
+        super().__init__(SceneTask(spec), **options)
