@@ -226,6 +226,8 @@ def test_options_out_of_their_choices_are_refused_with_the_choices() -> None:
         HandoverEnv(reward="shaped")
     with pytest.raises(InvalidOption, match=r"arm_count = 9 .* \[1, 8\]"):
         ReachTask(9)
+    with pytest.raises(InvalidOption, match="a scene with at least one arm"):
+        MultiArmEnv(armfleet.FleetSpec())  # nothing to drive (its world is closed again)
 
 
 def rollout(env: MultiArmEnv, seed: int, steps: int) -> list[Any]:

@@ -104,20 +104,11 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         self._models = ModelLibrary()  # every episode's arms from one library
         self._viewer_port: int | None = None
         self._world = self._launch()
-        arms = list(self._world.arms.values())
-        if not arms:
+        try:
+            self._build_spaces(task)
+        except BaseException:
             self._world.close()
-            raise InvalidOption("task", task.name, "a scene with at least one arm")
-        objects = list(self._world.objects)
-        self._observers = {
-            arm.name: ArmObserver(arm, objects, task.arm_spaces(arm.name)) for arm in arms
-        }
-        self._actions = spaces.Dict(
-            {arm.name: arm_action_space(arm, self._kind, self._limits) for arm in arms}
-        )
-        self._observations = spaces.Dict(
-            {name: observer.space for name, observer in self._observers.items()}
-        )
+            raise
         self.action_space = self._actions
         self.observation_space = self._observations
         rate = {"render_fps": 1.0 / (self._world.dt * self._period)}  # this env's own
@@ -233,6 +224,21 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         self._commanders = {}
 
     # -- the rest ------------------------------------------------------------------------
+    def _build_spaces(self, task: Task) -> None:
+        arms = list(self._world.arms.values())
+        if not arms:
+            raise InvalidOption("task", task.name, "a scene with at least one arm")
+        objects = list(self._world.objects)
+        self._observers = {
+            arm.name: ArmObserver(arm, objects, task.arm_spaces(arm.name)) for arm in arms
+        }
+        self._actions = spaces.Dict(
+            {arm.name: arm_action_space(arm, self._kind, self._limits) for arm in arms}
+        )
+        self._observations = spaces.Dict(
+            {name: observer.space for name, observer in self._observers.items()}
+        )
+
     def _launch(self) -> World:
         # Every episode's viewer on the first one's port: the page stays where it is.
         world = launch(self._spec, models=self._models, viewer_port=self._viewer_port)
