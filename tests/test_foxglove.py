@@ -219,8 +219,12 @@ def test_joint_states_and_tf_arrive_valid_against_their_advertised_schemas(
     info = client.server_info
     assert {"services", "assets", "time"} <= set(info["capabilities"])
     assert info["supportedEncodings"] == ["json"]
-    # Every bus topic has its channel, with the recording's schema (same name, same bytes).
+    # Every bus topic has its channel, with the recording's schema (same name, same bytes),
+    # also those first published after the server started (the arms' status, at 10 Hz).
+    client.wait_for(lambda: {"/bob/status", "/toby/status"} <= set(client.channels))
     topics = served.run(lambda: served.world.bus.topics)
+    descriptions = {"/bob/robot_description", "/toby/robot_description"}
+    assert set(client.channels) == set(topics) | descriptions
     for topic, message_type in topics.items():
         schema = encoder_for(message_type).schema
         assert client.channels[topic]["schemaName"] == schema.name, topic
@@ -454,3 +458,34 @@ def test_a_malformed_call_gets_an_error_reply_and_the_world_goes_on(
     assert ok, reply
     assert not any(math.isnan(q) for q in served.run(lambda: served.world.arms["bob"].positions))
     client.close()
+
+
+def test_a_client_that_never_reads_holds_back_neither_the_world_nor_other_clients() -> None:
+    with armfleet.World() as world:
+        world.spawn("bob", at=(0, 0))
+        world.spawn("toby", at=(1, 0))
+        world.run(0.2)  # every topic advertised (the arms' status comes at 10 Hz)
+        server = world.serve_foxglove(0)
+        slow = connect(  # its reader stops after one frame: the socket fills, then the queue
+            server.url, subprotocols=[SUBPROTOCOL], proxy=None, max_queue=1, close_timeout=0.5,
+            legacy=True,
+        )  # fmt: skip
+        fast = FoxgloveClient.open(server.url)
+        advertised: list[dict[str, Any]] = []
+        while len(advertised) < len(fast.channels):  # read until every channel is known
+            frame = json.loads(slow.recv(timeout=WAIT_S))
+            advertised += frame.get("channels", [])
+        subscriptions = [{"id": i, "channelId": c["id"]} for i, c in enumerate(advertised)]
+        slow.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+        fast.subscribe("/bob/joint_states")
+        deadline = time.monotonic() + WAIT_S
+        while len(server.listened) < len(world.bus.topics) and time.monotonic() < deadline:
+            world.run(0.01)  # the subscriptions take effect at step boundaries
+        assert server.listened == sorted(world.bus.topics)  # every topic
+        sent = server.messages_sent
+        world.run(3.0)  # flat out: ~6 messages per step to the slow client, never read
+        assert server.messages_sent - sent > 3 * 3000  # every one handed over, none waited for
+        fast.pump(1.0)
+        latest = fast.messages["/bob/joint_states"][-1].log_time_ns
+        assert world.time * 1e9 - latest < 0.01e9  # the fast client is not behind
+        slow.close()

@@ -17,7 +17,8 @@ once more: harmless for static transforms and descriptions).
 Arms coming and going: a watch on ``/bringup`` opens the channels of new topics and
 arms; a watch on each arm's ``/<arm>/status`` learns, through the bus's ``on_gone``,
 when the arm is removed, and closes its channels (the client sees them unadvertised).
-The same status messages (10 Hz per arm) carry the simulated time to the server.
+The same status messages (10 Hz per arm) open the channels of topics advertised since
+(``/<arm>/status`` itself, objects' topics) and carry the simulated time to the server.
 """
 
 from __future__ import annotations
@@ -206,6 +207,10 @@ class TopicChannels:
         entry.channel.close()
 
     def _on_status(self, status: Any) -> None:
+        # A topic first published after its arm's bring-up (the status itself, contacts,
+        # objects) gets its channel on the next tick.
+        if len(self._world.bus.topics) != len(self._topics):
+            self.refresh()
         now = stamp_ns(self._world.time)
         if now - self._last_time_ns >= stamp_ns(TIME_PERIOD_S):
             self._last_time_ns = now
