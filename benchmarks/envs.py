@@ -8,9 +8,13 @@ For 1, 2 and 4 Pandas (``armfleet/Reach-v0``'s row, 1 m apart) and control perio
         +-0.2 rad around its start, so every step sends every arm a new target and no arm
         ever touches anything;
   raw - ``world.step()`` in a loop on the same world, as many physics steps, the arms
-        holding (nothing sent, nothing observed).
-It prints environment steps per second, physics steps per second both ways, their ratio
-(the environment's overhead: 1.0 is none) and the overhead per environment step; and
+        holding (nothing sent, nothing observed);
+  cmd - the same loop sending each arm the env's joint targets with ``arm.move_to`` every
+        control period: the arms move as in ``env``, without the environment around them
+        (no checks, observations or reward).
+It prints environment steps per second, physics steps per second all three ways, the
+ratios env/raw (what an environment step costs over a bare physics loop: 1.0 is nothing)
+and env/cmd (the environment's own share), and the environment's own cost per step; and
 writes benchmarks/results/envs.json. Resets are not timed (bring-up: docs/envs.md).
 
     python benchmarks/envs.py            # 3 sizes x 3 periods, 3 turns (about a minute)
@@ -78,15 +82,36 @@ def timed_raw(env: ReachEnv, physics_steps: int) -> float:
     return time.perf_counter() - began
 
 
+def timed_commands(env: ReachEnv, steps: int) -> float:
+    """Wall time of ``steps`` control periods of ``world.step()``, each arm sent the
+    benchmark's joint target with ``arm.move_to`` at the start of each period [s]."""
+    env.reset(seed=0)
+    world = env.world
+    arms = [world.arm(name) for name in env.arm_names]
+    planned = [
+        [action[arm.name]["joint_positions"].astype(float) for arm in arms]
+        for action in actions(env, steps)
+    ]
+    began = time.perf_counter()
+    for targets in planned:
+        for arm, target in zip(arms, targets, strict=True):
+            arm.move_to(target)
+        for _ in range(env.control_period):
+            world.step()
+    return time.perf_counter() - began
+
+
 def measure(arms: int, period: int, env_steps: int, turns: int) -> dict[str, Any]:
     env = ReachEnv(arm_count=arms, control_period=period, action_kind="joint_positions")
     physics = env_steps * period
-    env_s, raw_s = [], []
+    env_s, raw_s, cmd_s = [], [], []
     for _ in range(turns):
         env_s.append(timed_env(env, env_steps))
         raw_s.append(timed_raw(env, physics))
+        cmd_s.append(timed_commands(env, env_steps))
     env.close()
     env_time, raw_time = statistics.median(env_s), statistics.median(raw_s)
+    cmd_time = statistics.median(cmd_s)
     return {
         "arms": arms,
         "control_period": period,
@@ -94,11 +119,14 @@ def measure(arms: int, period: int, env_steps: int, turns: int) -> dict[str, Any
         "physics_steps": physics,
         "env_s": env_s,
         "raw_s": raw_s,
+        "cmd_s": cmd_s,
         "env_steps_per_s": env_steps / env_time,
         "env_physics_steps_per_s": physics / env_time,
         "raw_physics_steps_per_s": physics / raw_time,
+        "cmd_physics_steps_per_s": physics / cmd_time,
         "env_over_raw": env_time / raw_time,
-        "overhead_per_env_step_ms": (env_time - raw_time) / env_steps * 1e3,
+        "env_over_cmd": env_time / cmd_time,
+        "env_own_ms_per_step": (env_time - cmd_time) / env_steps * 1e3,
     }
 
 
@@ -125,13 +153,15 @@ def main() -> None:
     print(f"machine load (1 min) before: {load:.2f}, after: {os.getloadavg()[0]:.2f}")
     print(
         f"{'arms':>4} {'period':>6} {'env steps/s':>12} {'env phys/s':>11} "
-        f"{'raw phys/s':>11} {'env/raw':>8} {'overhead ms/step':>17}"
+        f"{'cmd phys/s':>11} {'raw phys/s':>11} {'env/raw':>8} {'env/cmd':>8} "
+        f"{'env own ms/step':>16}"
     )
     for row in rows:
         print(
             f"{row['arms']:>4} {row['control_period']:>6} {row['env_steps_per_s']:>12.0f} "
-            f"{row['env_physics_steps_per_s']:>11.0f} {row['raw_physics_steps_per_s']:>11.0f} "
-            f"{row['env_over_raw']:>8.2f} {row['overhead_per_env_step_ms']:>17.3f}"
+            f"{row['env_physics_steps_per_s']:>11.0f} {row['cmd_physics_steps_per_s']:>11.0f} "
+            f"{row['raw_physics_steps_per_s']:>11.0f} {row['env_over_raw']:>8.2f} "
+            f"{row['env_over_cmd']:>8.2f} {row['env_own_ms_per_step']:>16.3f}"
         )
     result = {
         "load_before": load,

@@ -365,5 +365,6 @@ def test_the_benchmark_short_mode_writes_every_figure(tmp_path: Path) -> None:
     assert [(row["arms"], row["control_period"]) for row in rows] == [(2, 1), (2, 10)]
     for row in rows:
         assert row["env_steps_per_s"] > 0 and row["raw_physics_steps_per_s"] > 0
+        assert row["cmd_physics_steps_per_s"] > 0 and row["env_own_ms_per_step"] != 0
         assert row["env_over_raw"] > 0  # a timing: reported, never asserted
     assert "env/raw" in done.stdout
