@@ -489,3 +489,25 @@ def test_a_client_that_never_reads_holds_back_neither_the_world_nor_other_client
         latest = fast.messages["/bob/joint_states"][-1].log_time_ns
         assert world.time * 1e9 - latest < 0.01e9  # the fast client is not behind
         slow.close()
+
+
+def test_the_documented_layout_names_only_what_the_server_offers(served: Served) -> None:
+    """docs/foxglove-layout.json (for bob and toby) cannot drift from the server."""
+    layout = json.loads((Path(__file__).parents[1] / "docs" / "foxglove-layout.json").read_text())
+    client = served.client()
+    client.wait_for(lambda: "/bob/status" in client.channels)
+    panels = layout["configById"]
+    topics = {
+        layer["topic"] for layer in panels["3D!armfleet"]["layers"].values() if "topic" in layer
+    }
+    topics |= set(panels["3D!armfleet"]["topics"])
+    topics |= {path["value"].split(".")[0] for path in panels["Plot!joints"]["paths"]}
+    topics.add(panels["RawMessages!tf"]["topicPath"])
+    assert topics <= set(client.channels), topics - set(client.channels)
+    calls = [config for name, config in panels.items() if name.startswith("CallService!")]
+    for call in calls:
+        schema = json.loads(client.services[call["serviceName"]]["request"]["schema"])
+        jsonschema.validate(json.loads(call["requestPayload"]), schema)
+        ok, reply = client.call(call["serviceName"], call["requestPayload"].encode())
+        assert ok, reply
+    client.close()
