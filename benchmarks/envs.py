@@ -17,7 +17,7 @@ ratios env/raw (what an environment step costs over a bare physics loop: 1.0 is 
 and env/cmd (the environment's own share), and the environment's own cost per step; and
 writes benchmarks/results/envs.json. Resets are not timed (bring-up: docs/envs.md).
 
-    python benchmarks/envs.py            # 3 sizes x 3 periods, 3 turns (about a minute)
+    python benchmarks/envs.py            # 3 sizes x 3 periods, 5 turns (about 90 s)
     python benchmarks/envs.py --short    # 2 arms, periods 1 and 10, 1 turn (CI)
 """
 
@@ -134,9 +134,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--short", action="store_true", help="2 arms, periods 1 and 10 (CI)")
     parser.add_argument(
-        "--physics-steps", type=int, default=3000, help="physics steps per measurement (min.)"
+        "--physics-steps", type=int, default=2000, help="physics steps per measurement (min.)"
     )
-    parser.add_argument("--turns", type=int, default=3, help="turns of env and raw (medians)")
+    parser.add_argument("--turns", type=int, default=5, help="turns of env and raw (medians)")
     parser.add_argument("--json", type=Path, default=RESULTS / "envs.json")
     args = parser.parse_args()
     sizes, periods, turns, physics = (
