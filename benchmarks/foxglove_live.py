@@ -88,6 +88,7 @@ def run_client(url: str, mode: str) -> None:
     ws = connect(
         url, subprotocols=[Subprotocol("foxglove.sdk.v1")], proxy=None, max_size=None,
         max_queue=None if read else 1, close_timeout=0.5, legacy=True,
+        ping_interval=None,  # a client that never reads would time itself out on its pings
     )  # fmt: skip
     channels: list[dict[str, Any]] = []
     wait_s = SETTLE_S
@@ -227,8 +228,8 @@ def print_table(results: list[Result]) -> None:
             )
         print(
             f"     reading client: {r.client_received} messages, {r.client_received_mb} MB "
-            f"({r.client_share_of_sent:.0%} of those sent to it; the rest dropped by the "
-            "server's queue)"
+            f"({r.client_share_of_sent:.0%} of those handed to the server; the rest were "
+            "dropped by its queue)"
         )
 
 

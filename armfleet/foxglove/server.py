@@ -122,10 +122,14 @@ class FoxgloveServer:
                 f"cannot serve Foxglove on {host}:{port}: {exc}; choose another port, or 0 "
                 "for a free one"
             ) from None
-        self._services = ArmServices(world, self.url)
-        self._server.add_services(self._services.sdk_services())
-        self._channels.start()
         self._closed = False
+        try:
+            self._services = ArmServices(world, self.url)
+            self._server.add_services(self._services.sdk_services())
+            self._channels.start()
+        except BaseException:
+            self.close()
+            raise
 
     # -- properties -------------------------------------------------------------------
     @property
