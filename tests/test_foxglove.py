@@ -11,6 +11,8 @@ import json
 import math
 import os
 import struct
+import subprocess
+import sys
 import threading
 import time
 from collections import defaultdict
@@ -26,6 +28,7 @@ from websockets.sync.client import ClientConnection, connect
 from websockets.typing import Subprotocol
 
 import armfleet
+import armfleet.foxglove
 from armfleet.foxglove import SERVICE_SCHEMAS, FoxgloveError, FoxgloveServer, urdf_uri
 from armfleet.recording.encode import encoder_for
 
@@ -511,3 +514,16 @@ def test_the_documented_layout_names_only_what_the_server_offers(served: Served)
         ok, reply = client.call(call["serviceName"], call["requestPayload"].encode())
         assert ok, reply
     client.close()
+
+
+def test_import_armfleet_does_not_load_the_foxglove_sdk() -> None:
+    code = (
+        "import sys, armfleet; print('foxglove' in sys.modules, 'armfleet.foxglove' in sys.modules)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["False", "False"]
+
+
+@pytest.mark.parametrize("name", armfleet.foxglove.__all__)
+def test_every_name_of_the_foxglove_package_resolves(name: str) -> None:
+    assert getattr(armfleet.foxglove, name) is not None

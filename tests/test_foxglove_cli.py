@@ -61,6 +61,10 @@ def test_a_running_world_serves_foxglove_and_shuts_down_cleanly(tmp_path: Path) 
         ok, urdf = client.fetch("package://armfleet/robots/bob.urdf")
         assert ok and b"bob_panda_link7" in urdf
         client.close()
+        # A spawn that would join this world cannot set up its Foxglove server.
+        joining = cli(tmp_path, "spawn", "carol", "--at", "2,0", "--foxglove")
+        assert joining.returncode == 2
+        assert "--foxglove set options of a new world, but a world is running" in joining.stderr
         assert world.stop() == 0
     assert not any("Traceback" in line for line in world.stderr)
 
