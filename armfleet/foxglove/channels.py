@@ -18,7 +18,8 @@ Arms coming and going: a watch on ``/bringup`` opens the channels of new topics 
 arms; a watch on each arm's ``/<arm>/status`` learns, through the bus's ``on_gone``,
 when the arm is removed, and closes its channels (the client sees them unadvertised).
 The same status messages (10 Hz per arm) open the channels of topics advertised since
-(``/<arm>/status`` itself, objects' topics) and carry the simulated time to the server.
+(``/<arm>/status`` itself, any topic first published later) and carry the simulated time
+to the server.
 """
 
 from __future__ import annotations
@@ -207,8 +208,8 @@ class TopicChannels:
         entry.channel.close()
 
     def _on_status(self, status: Any) -> None:
-        # A topic first published after its arm's bring-up (the status itself, contacts,
-        # objects) gets its channel on the next tick.
+        # A topic first published after its arm's bring-up (the status itself) gets its
+        # channel on the next tick.
         if len(self._world.bus.topics) != len(self._topics):
             self.refresh()
         now = stamp_ns(self._world.time)
