@@ -17,6 +17,13 @@ from armfleet.envs import HandoverEnv, MultiArmEnv, ReachEnv
 from armfleet.envs.poses import rotation_from_rpy
 from armfleet.envs.tasks.handover_task import HandoverTask
 from armfleet.envs.tasks.reach_task import ReachTask
+from armfleet.sweeps.scenarios.handover import (
+    HANDOVER_AT_M,
+    MAT_TO_BAR_CENTRE_M,
+    frame,
+    grasp,
+    lifted,
+)
 
 #: An arm at rest holds its target this closely [rad] (docs: hold tolerance).
 HOLD_RAD = 1e-3
@@ -253,4 +260,111 @@ def test_the_gripper_entry_closes_and_opens_the_fingers() -> None:
     still(env, 8)
     assert abs(bob.gripper.width - bob.gripper.max_width) < 1e-3
     assert observation["bob"]["gripper_width"][0] < bob.gripper.max_width
+    env.close()
+
+
+def pose_matrix(vector: np.ndarray) -> np.ndarray:
+    """4x4 pose of an observed (x, y, z, qx, qy, qz, qw)."""
+    pose = np.eye(4)
+    pose[:3, :3] = pin.Quaternion(np.asarray(vector[3:], dtype=float)).normalized().matrix()
+    pose[:3, 3] = vector[:3]
+    return pose
+
+
+class ScriptedHandover:
+    """A policy of straight tool moves (deltas of at most the action bounds) and gripper
+    commands, seeing the world only through the environment's observations."""
+
+    def __init__(self, env: MultiArmEnv) -> None:
+        self.env = env
+        self.closed = {"bob": False, "toby": False}
+        world = env.world  # a constant of each arm: where its tcp sits on tool0
+        self.tcp_in_tool0 = {
+            arm: np.linalg.solve(
+                world.tf.world_pose(f"{arm}_tool0"), world.tf.world_pose(f"{arm}_tcp")
+            )
+            for arm in self.closed
+        }
+        self.rewards: list[float] = []
+        self.observation, _ = env.reset(seed=3)
+        self.terminated = False
+
+    def step(self, deltas: dict[str, np.ndarray]) -> None:
+        action = {
+            arm: {
+                "tool_delta": deltas.get(arm, np.zeros(6)).astype(np.float32),
+                "gripper": np.array([float(closed)], np.float32),
+            }
+            for arm, closed in self.closed.items()
+        }
+        self.observation, reward, self.terminated, _, info = self.env.step(action)
+        assert info["refused"] == {} and info["stopped"] == [], info
+        self.rewards.append(float(reward))
+
+    def seen(self, name: str) -> np.ndarray:
+        """An object's pose as bob observes it."""
+        return pose_matrix(self.observation["bob"]["objects"][name])
+
+    def tcp(self, arm: str) -> np.ndarray:
+        return pose_matrix(self.observation[arm]["tool_pose"]) @ self.tcp_in_tool0[arm]
+
+    def wait(self, steps: int = 200) -> None:
+        """Until every joint is still (or ``steps``)."""
+        for _ in range(steps):
+            self.step({})
+            speeds = [np.abs(o["joint_velocities"]).max() for o in self.observation.values()]
+            if max(speeds) < 1e-3 or self.terminated:
+                return
+
+    def move(self, arm: str, tcp: np.ndarray) -> None:
+        """tcp to ``tcp`` in a straight line, at the largest steps the actions take."""
+        goal = tcp @ np.linalg.inv(self.tcp_in_tool0[arm])
+        limits = np.array([0.02] * 3 + [0.1] * 3)
+        for _ in range(300):
+            target = self.env.commander(arm).tool_target  # where the deltas have sent it
+            error = np.concatenate(
+                [goal[:3, 3] - target[:3, 3], pin.rpy.matrixToRpy(goal[:3, :3] @ target[:3, :3].T)]
+            )
+            if np.abs(error).max() < 1e-9:
+                break
+            self.step({arm: np.clip(error, -limits, limits)})
+        self.wait()
+
+    def grip(self, arm: str, close: bool) -> None:
+        self.closed[arm] = close
+        for _ in range(25):  # 0.5 s
+            self.step({})
+
+
+def test_a_scripted_policy_hands_the_bar_over_through_the_action_interface() -> None:
+    # The task can be done with its actions and observations alone: bob picks the bar,
+    # holds it out, toby takes it and puts it on the mat (the steps of examples/handover.py,
+    # as straight tool moves instead of planned ones). Sparse reward: 0 until the end.
+    env = HandoverEnv(reward="sparse", control_period=20)
+    policy = ScriptedHandover(env)
+    pick = grasp(policy.seen("bar"), -1)
+    policy.move("bob", lifted(pick))
+    policy.move("bob", pick)
+    policy.grip("bob", close=True)
+    policy.move("bob", lifted(pick))
+    bob_in_bar = np.linalg.solve(policy.seen("bar"), policy.tcp("bob"))
+    policy.move("bob", frame(HANDOVER_AT_M) @ bob_in_bar)
+    take = grasp(policy.seen("bar"), +1)
+    policy.move("toby", lifted(take))
+    policy.move("toby", take)
+    policy.grip("toby", close=True)
+    policy.grip("bob", close=False)
+    policy.move("bob", policy.tcp("bob") @ lifted(np.eye(4), -0.15))  # back along its z
+    toby_in_bar = np.linalg.solve(policy.seen("bar"), policy.tcp("toby"))
+    place = lifted(policy.seen("mat"), MAT_TO_BAR_CENTRE_M + 0.002) @ toby_in_bar
+    policy.move("toby", lifted(place))
+    policy.move("toby", place)
+    assert not policy.terminated and set(policy.rewards) == {0.0}  # held: no success yet
+    policy.closed["toby"] = False
+    policy.wait(50)
+    assert policy.terminated and policy.rewards[-1] == 1.0
+    assert set(policy.rewards[:-1]) == {0.0}
+    task = env.task
+    assert isinstance(task, HandoverTask)
+    assert np.linalg.norm(env.world.object("bar").position - task.goal(env.world)) < 0.005
     env.close()
