@@ -336,8 +336,8 @@ def test_resets_leave_no_pybullet_client_or_thread_behind(reach: MultiArmEnv) ->
         reach.step(reach.action_space.sample())
     again = p.connect(p.DIRECT)
     p.disconnect(again)
-    assert again == probe
-    assert threading.active_count() == threads
+    assert again <= probe  # (lower if an earlier test's client was let go meanwhile)
+    assert threading.active_count() <= threads
 
 
 def test_import_armfleet_does_not_load_the_environments() -> None:
