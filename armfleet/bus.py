@@ -20,12 +20,19 @@ viewer, and the live API's per-client queues.
 
 Topics can go away (:meth:`Bus.unadvertise`, when an arm is removed); their
 subscribers are told through ``on_gone``.
+
+A subscriber that wants a stream at a display rate, not every step, passes
+``period_s``: it then gets the messages of one instant of simulated time per
+period (every arm's ``/tf`` of that step, not one arm's), and while none of a
+topic's subscribers is due, :meth:`Bus.has_subscribers` says no, so the topics
+computed only for listeners (``/tf``, a controller's state) are not computed at all.
 """
 
 from __future__ import annotations
 
 import functools
 import logging
+import math
 import re
 from collections import defaultdict
 from collections.abc import Callable
@@ -33,7 +40,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from armfleet.checks.flags import flag
-from armfleet.errors import ArmfleetError
+from armfleet.checks.real_numbers import real_number
+from armfleet.errors import ArmfleetError, InvalidNumber
 
 logger = logging.getLogger("armfleet")
 
@@ -99,6 +107,11 @@ class Subscription:
     on_error: ErrorHandler | None = field(repr=False, default=None)
     on_gone: GoneHandler | None = field(repr=False, default=None)
     failure: SubscriberFailure | None = None
+    #: At most one instant of simulated time per period [s]; None: every message.
+    period_s: float | None = None
+    #: The instant being delivered (simulated time [s]), and when the next one is due.
+    _instant: float = field(repr=False, default=-math.inf)
+    _next_due: float = field(repr=False, default=-math.inf)
 
     @property
     def active(self) -> bool:
@@ -109,6 +122,22 @@ class Subscription:
         if self._bus is not None:
             self._bus._remove(self)
             self._bus = None
+
+    def wants(self, now: float) -> bool:
+        """Whether a message published at simulated time ``now`` is for it."""
+        return self.period_s is None or now == self._instant or now >= self._next_due
+
+    def take(self, now: float) -> bool:
+        """:meth:`wants`, starting a new instant when one is due."""
+        if self.period_s is None or now == self._instant:
+            return True
+        if now < self._next_due:
+            return False
+        self._instant = now
+        # Due again a period on; the margin keeps a period that is a whole number of
+        # steps from slipping a step on rounding.
+        self._next_due = now + self.period_s * (1.0 - 1e-9)
+        return True
 
 
 @dataclass(eq=False)
@@ -136,7 +165,12 @@ class Tap:
 class Bus:
     """Topics of one world."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Callable[[], float] | None = None) -> None:
+        """Args:
+        clock: the simulated time [s], for subscribers that pass ``period_s``; a bus
+            without one delivers them every message.
+        """
+        self._clock = clock
         self._subscriptions: dict[str, list[Subscription]] = defaultdict(list)
         self._types: dict[str, type] = {}
         self._latched: dict[str, list[Any]] = defaultdict(list)
@@ -196,6 +230,7 @@ class Bus:
         *,
         on_error: ErrorHandler | None = None,
         on_gone: GoneHandler | None = None,
+        period_s: float | None = None,
     ) -> Subscription:
         """Call ``callback(message)`` for every message on ``topic``.
 
@@ -207,12 +242,20 @@ class Bus:
                 subscription). Without it a raising callback is logged, counted in
                 :attr:`failures` and dropped; the publisher never sees the exception.
             on_gone: called with the topic and why when it is withdrawn (:meth:`unadvertise`).
+            period_s: deliver the messages of one instant of simulated time per
+                ``period_s`` [s] (a display rate) rather than every message; a topic
+                whose subscribers are all between two instants is not computed.
         """
         _check_name(topic)
+        if period_s is not None:
+            valid = "a period > 0 s (None: every message)"
+            period_s = real_number(period_s, "period_s", valid, low=0.0)
+            if period_s == 0.0:
+                raise InvalidNumber("period_s", period_s, valid)
         _check_callable("subscribe", "callback", callback)
         _check_callable("subscribe", "on_error", on_error, optional=True)
         _check_callable("subscribe", "on_gone", on_gone, optional=True)
-        subscription = Subscription(topic, callback, self, on_error, on_gone)
+        subscription = Subscription(topic, callback, self, on_error, on_gone, period_s=period_s)
         self._subscriptions[topic].append(subscription)
         for message in self._latched.get(topic, ()):
             if not self._call(subscription, callback, message):
@@ -236,7 +279,13 @@ class Bus:
         """Whether a message on ``topic`` would reach anyone (a subscriber or a tap)."""
         if not (isinstance(topic, str) and topic in self._types):  # advertised: checked
             _check_name(topic)  # the controllers ask every step: not their own topics again
-        return bool(self._taps) or bool(self._subscriptions.get(topic))
+        subscribers = self._subscriptions.get(topic)
+        if self._taps or not subscribers:
+            return bool(self._taps)
+        if self._clock is None:
+            return True
+        now = self._clock()
+        return any(s.wants(now) for s in subscribers)
 
     def publish(self, topic: str, message: Any, *, latch: bool = False) -> None:
         """Deliver ``message`` to every subscriber of ``topic``.
@@ -257,7 +306,13 @@ class Bus:
             )
         if latch:
             self._latched[topic].append(message)
+        now: float | None = None
         for subscription in tuple(self._subscriptions.get(topic, ())):
+            if subscription.period_s is not None and self._clock is not None:
+                if now is None:
+                    now = self._clock()
+                if not subscription.take(now):
+                    continue
             try:
                 subscription.callback(message)
             except Exception as exc:

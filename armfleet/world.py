@@ -116,7 +116,7 @@ class World:
                 f"shipped models), got {type(models).__name__}"
             )
         self._models = models or ModelLibrary()
-        self._bus = Bus()
+        self._bus = Bus(clock=lambda: self.time)
         self._bus.advertise(BRINGUP_TOPIC, BringupEvent)
         self._arms: dict[str, Arm] = {}
         self._memory = JointMemory(self._client)
@@ -222,7 +222,9 @@ class World:
 
         return record(self, path, spec=spec, topics=topics)
 
-    def serve_foxglove(self, port: int = 0, *, host: str = "127.0.0.1") -> FoxgloveServer:
+    def serve_foxglove(
+        self, port: int = 0, *, host: str = "127.0.0.1", rate_hz: float | None = 100.0
+    ) -> FoxgloveServer:
         """Serve this world to Foxglove on ``ws://HOST:PORT`` (docs/foxglove.md).
 
         Every topic (the recording's schemas, JSON), the arms' URDFs and meshes, and the
@@ -233,6 +235,8 @@ class World:
             port: TCP port, 0 for a free one (``server.port``); Foxglove proposes 8765.
             host: address to listen on; anything but loopback lets other machines
                 command the arms.
+            rate_hz: instants of the streamed topics (``/tf``, joint, controller and
+                gripper states) sent per simulated second; None: every step.
 
         Returns:
             The running :class:`armfleet.foxglove.FoxgloveServer`; close it, or it
@@ -243,7 +247,7 @@ class World:
         """
         from armfleet.foxglove import FoxgloveServer  # foxglove-sdk only loaded when asked for
 
-        server = FoxgloveServer(self, port, host=host)
+        server = FoxgloveServer(self, port, host=host, rate_hz=rate_hz)
         self._foxglove = [s for s in self._foxglove if not s.closed] + [server]
         return server
 

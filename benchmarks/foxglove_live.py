@@ -10,10 +10,14 @@ alternating chunks of simulated time:
 * ``layout``: a server with one client, in a process of its own, subscribed to what
   the layout of docs/foxglove.md shows (``/tf``, ``/tf_static``, the robot descriptions,
   one arm's joint states) and reading it;
-* ``all``: a server with one client subscribed to every channel and reading everything
-  (``/tf`` and the controller states are then computed, encoded and sent: the world's
-  whole share of the heaviest Foxglove session);
-* ``slow``: a server with one client subscribed to every channel that never reads
+* ``all``: a server with one client subscribed to every channel and reading everything,
+  the streams (``/tf``, joint and controller states) at the default 100 Hz of simulated
+  time;
+* ``every``: the same with the streams at every step (``rate_hz=None``, 1 kHz): ``/tf``
+  and the controller states are then computed, encoded and sent at every step, the
+  world's whole share of the heaviest Foxglove session;
+* ``slow``: a server (streams at every step) with one client subscribed to every
+  channel that never reads
   (its socket fills, then the server's 1,024-message queue drops the oldest).
 
 It reports the real-time factor (simulated time / wall time) of each, the ratios to
@@ -45,12 +49,15 @@ import numpy as np
 from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
 
 import armfleet
+from armfleet.foxglove import FoxgloveServer
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "foxglove_live.json"
-MODES = ("none", "idle", "layout", "all", "slow")
+MODES = ("none", "idle", "layout", "all", "every", "slow")
 #: What each client subscribes to: the topics of docs/foxglove.md's layout, or every one.
-CLIENTS = {"layout": "layout", "all": "read", "slow": "slow"}
+CLIENTS = {"layout": "layout", "all": "read", "every": "read", "slow": "slow"}
+#: Streams at every step (None) or at the server's default display rate.
+EVERY_STEP = ("every", "slow")
 #: Longest wait for a client to connect and its subscriptions to take effect [s].
 SETTLE_S = 30.0
 
@@ -147,6 +154,13 @@ def start_client(url: str, mode: str) -> tuple[subprocess.Popen[str], int]:
     return client, int(json.loads(line)["subscribed"])
 
 
+def serve(world: armfleet.World, mode: str) -> FoxgloveServer:
+    """``world`` served as ``mode`` wants: its streams at every step, or at the default."""
+    if mode in EVERY_STEP:
+        return world.serve_foxglove(0, rate_hz=None)
+    return world.serve_foxglove(0)
+
+
 def measure(count: int, chunk_s: float, repeats: int) -> Result:
     print(f"\n== {count} arms, {repeats} x {chunk_s} s simulated per mode")
     worlds = {mode: armfleet.World() for mode in MODES}
@@ -155,7 +169,7 @@ def measure(count: int, chunk_s: float, repeats: int) -> Result:
         for world in worlds.values():
             grid_spawn(world, count)
             world.run(0.2)  # every topic advertised (the arms' status: 10 Hz)
-        servers = {mode: worlds[mode].serve_foxglove(0) for mode in MODES if mode != "none"}
+        servers = {mode: serve(worlds[mode], mode) for mode in MODES if mode != "none"}
         for mode, client_mode in CLIENTS.items():
             clients[mode], subscribed = start_client(servers[mode].url, client_mode)
             wanted = subscribed - count  # the robot descriptions are no bus topics

@@ -79,6 +79,39 @@ def test_a_callback_may_cancel_itself_while_being_called() -> None:
     assert always == [Note("1"), Note("2")]  # the cancel did not skip a neighbour
 
 
+def test_a_subscriber_with_a_period_gets_one_instant_per_period() -> None:
+    """Every message of a due instant (several publishers at one time), none between,
+    while a plain subscriber gets everything; has_subscribers says no between instants."""
+    now = [0.0]
+    bus = Bus(clock=lambda: now[0])
+    every: list[tuple[float, str]] = []
+    paced: list[tuple[float, str]] = []
+    bus.subscribe("/tf", lambda m: every.append((now[0], m)))
+    bus.subscribe("/tf", lambda m: paced.append((now[0], m)), period_s=0.01)
+    asked = []
+    for step in range(50):  # 1 ms steps, two publishers per step
+        now[0] = step * 0.001
+        bus.publish("/tf", "bob")
+        bus.publish("/tf", "toby")
+    assert len(every) == 100
+    assert [t for t, _ in paced[::2]] == pytest.approx([0.0, 0.01, 0.02, 0.03, 0.04])
+    assert [m for _, m in paced] == ["bob", "toby"] * 5
+    alone = Bus(clock=lambda: now[0])
+    alone.subscribe("/tf", lambda m: None, period_s=0.01)
+    for step in range(50, 70):
+        now[0] = step * 0.001
+        asked.append(alone.has_subscribers("/tf"))
+        if asked[-1]:
+            alone.publish("/tf", "bob")
+    assert asked == [True] + [False] * 9 + [True] + [False] * 9
+
+
+@pytest.mark.parametrize("period", [0, -1.0, float("nan"), "1"])
+def test_a_bad_period_is_refused(period: Any) -> None:
+    with pytest.raises(armfleet.InvalidNumber, match="period_s"):
+        Bus().subscribe("/tf", lambda m: None, period_s=period)
+
+
 def test_latched_messages_replay_to_late_subscribers() -> None:
     bus = Bus()
     bus.publish("/tf_static", Note("bob"), latch=True)

@@ -7,6 +7,7 @@ steps in a thread of its own at the wall clock's pace, as a command-line run doe
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -468,7 +469,7 @@ def test_a_client_that_never_reads_holds_back_neither_the_world_nor_other_client
         world.spawn("bob", at=(0, 0))
         world.spawn("toby", at=(1, 0))
         world.run(0.2)  # every topic advertised (the arms' status comes at 10 Hz)
-        server = world.serve_foxglove(0)
+        server = world.serve_foxglove(0, rate_hz=None)  # every step: the heaviest stream
         slow = connect(  # its reader stops after one frame: the socket fills, then the queue
             server.url, subprotocols=[SUBPROTOCOL], proxy=None, max_queue=1, close_timeout=0.5,
             legacy=True,
@@ -495,6 +496,49 @@ def test_a_client_that_never_reads_holds_back_neither_the_world_nor_other_client
         latest = fast.messages["/bob/joint_states"][-1].log_time_ns
         assert world.time * 1e9 - latest < 0.01e9  # the fast client is not behind
         slow.close()
+
+
+def test_streams_go_out_at_the_display_rate_one_whole_instant_at_a_time() -> None:
+    """At 50 Hz a client gets one instant per 20 ms of simulated time, with both arms'
+    /tf of that instant, while the commands and status go out as published; between
+    instants the world does not even compute /tf."""
+    with armfleet.World() as world:
+        world.spawn("bob", at=(0, 0))
+        world.spawn("toby", at=(1, 0))
+        world.run(0.2)
+        server = world.serve_foxglove(0, rate_hz=50)
+        client = FoxgloveClient.open(server.url)
+        client.subscribe("/tf", "/bob/joint_states", "/bob/status")
+        deadline = time.monotonic() + WAIT_S
+        while len(server.listened) < 3 and time.monotonic() < deadline:
+            world.process_requests()
+            time.sleep(0.01)
+        world.run(1.0)
+        client.pump(1.0)
+        tf_times = [m.log_time_ns for m in client.messages["/tf"]]
+        instants = sorted(set(tf_times))
+        assert 49 <= len(instants) <= 51, len(instants)
+        assert all(tf_times.count(t) == 2 for t in instants)  # bob's and toby's together
+        gaps = {round((b - a) * 1e-9, 6) for a, b in itertools.pairwise(instants)}
+        assert gaps == {0.02}, gaps
+        states = sorted({m.log_time_ns for m in client.messages["/bob/joint_states"]})
+        assert 49 <= len(states) <= 51
+        assert len(client.messages["/bob/status"]) >= 9  # 10 Hz, all of them
+        # Only the client listens to /tf, so the world computes it at the client's instants:
+        # on 5 steps of 100.
+        wanted = []
+        for _ in range(100):
+            wanted.append(world.bus.has_subscribers("/tf"))
+            world.step()
+        assert sum(wanted) == 5, wanted
+        client.close()
+
+
+def test_a_bad_rate_is_one_clear_error() -> None:
+    with armfleet.World() as world:
+        for rate in (0, -5, math.nan, "fast", 1e9):
+            with pytest.raises(FoxgloveError, match=r"Foxglove rate .* invalid; give a rate"):
+                world.serve_foxglove(0, rate_hz=rate)  # type: ignore[arg-type]
 
 
 def test_the_documented_layout_names_only_what_the_server_offers(served: Served) -> None:

@@ -105,6 +105,9 @@ def test_a_bad_port_from_a_real_process_is_one_line_and_exit_2(tmp_path: Path) -
         ),
         (("--foxglove", "0", "--foxglove-bind", "1.2.3.4.5"), "is not an IP address"),
         (("--foxglove-bind", "0.0.0.0"), "--foxglove-bind goes with --foxglove [PORT]"),
+        (("--foxglove-rate", "30"), "--foxglove-rate goes with --foxglove [PORT]"),
+        (("--foxglove", "0", "--foxglove-rate", "0"), "argument --foxglove-rate: '0' is invalid"),
+        (("--foxglove", "0", "--foxglove-rate", "inf"), "argument --foxglove-rate: 'inf'"),
         (
             ("--foxglove", "7000", "--api-port", "7000"),
             "--foxglove 7000 is also another server's port; give two ports",

@@ -6,7 +6,8 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from armfleet.cli.number_arguments import port_or_free
+from armfleet.checks.number_ranges import FOXGLOVE_RATE_HZ
+from armfleet.cli.number_arguments import number_in, port_or_free
 from armfleet.cli.parser import UsageError
 from armfleet.remote.address import DEFAULT_BIND
 
@@ -16,6 +17,9 @@ if TYPE_CHECKING:
 
 #: The port ``--foxglove`` alone listens on: the one Foxglove proposes.
 DEFAULT_FOXGLOVE_PORT = 8765
+#: ``--foxglove-rate`` when not given (armfleet.foxglove.server.DEFAULT_RATE_HZ, not
+#: imported here: the SDK loads only for a world that serves Foxglove).
+DEFAULT_FOXGLOVE_RATE_HZ = 100.0
 
 
 def add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
@@ -31,6 +35,12 @@ def add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"address Foxglove's server listens on (default {DEFAULT_BIND}: this machine "
         "only); any other lets other machines command the arms",
     )  # fmt: skip
+    group.add_argument(
+        "--foxglove-rate", type=number_in(FOXGLOVE_RATE_HZ), default=None, metavar="HZ",
+        help=f"instants per simulated second of the streamed topics (/tf, joint and "
+        f"controller states; default {DEFAULT_FOXGLOVE_RATE_HZ:g}); the step rate or more "
+        "sends every step",
+    )  # fmt: skip
 
 
 def check_foxglove_arguments(args: argparse.Namespace) -> None:
@@ -39,6 +49,8 @@ def check_foxglove_arguments(args: argparse.Namespace) -> None:
     if getattr(args, "foxglove", None) is None:
         if bind != DEFAULT_BIND:
             raise UsageError("--foxglove-bind goes with --foxglove [PORT]; add it, or drop both")
+        if getattr(args, "foxglove_rate", None) is not None:
+            raise UsageError("--foxglove-rate goes with --foxglove [PORT]; add it, or drop both")
         return
     from armfleet.foxglove.server import check_host
 
@@ -51,7 +63,9 @@ def start_foxglove(world: World, args: argparse.Namespace) -> FoxgloveServer | N
     port = getattr(args, "foxglove", None)
     if port is None:
         return None
-    server = world.serve_foxglove(port, host=args.foxglove_bind)
+    rate = getattr(args, "foxglove_rate", None)
+    rate = DEFAULT_FOXGLOVE_RATE_HZ if rate is None else rate
+    server = world.serve_foxglove(port, host=args.foxglove_bind, rate_hz=rate)
     if not getattr(args, "quiet", False):
         print(f"foxglove: {server.url}", flush=True)
     if server.exposed:

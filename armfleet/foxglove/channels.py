@@ -10,6 +10,13 @@ subscribes: the Foxglove server's listener then asks the stepping thread (throug
 last client leaves. So ``/tf`` and ``/<arm>/position_controller/state``, computed only
 for listeners (:meth:`armfleet.bus.Bus.has_subscribers`), stay off until watched.
 
+The streams published every step (``/tf``, each arm's joint states and controller
+and gripper states: :data:`STREAMED_TYPES`) go out at a display rate, one instant of
+simulated time per ``stream_period_s`` (every arm's ``/tf`` of that step together): the
+bus subscription carries the period, so between two instants ``/tf`` and the
+controllers' states are not even computed. Everything else (commands, status,
+collisions, bring-up, planned motions) goes out as published.
+
 Latched topics (``/tf_static``) and the robot descriptions are sent again to every
 client that subscribes, whenever it comes (a client already subscribed receives them
 once more: harmless for static transforms and descriptions).
@@ -36,8 +43,10 @@ import foxglove
 from armfleet.bringup import BRINGUP_TOPIC
 from armfleet.errors import WorldClosed
 from armfleet.foxglove.assets import AssetLibrary
+from armfleet.messages import ControllerState, GripperState, JointState
 from armfleet.recording.encode import MessageEncoder, StringEncoder, encoder_for, stamp_ns
 from armfleet.recording.schemas import MessageSchema
+from armfleet.robot_state_publisher import TF_TOPIC
 
 if TYPE_CHECKING:
     from armfleet.arm import Arm
@@ -50,6 +59,8 @@ logger = logging.getLogger("armfleet")
 JSON = "json"
 #: Simulated time between two time broadcasts to the clients [s].
 TIME_PERIOD_S = 0.1
+#: Topics of these types, and ``/tf``, are sent at the display rate, not every step.
+STREAMED_TYPES = (JointState, ControllerState, GripperState)
 
 
 def sdk_schema(schema: MessageSchema) -> foxglove.Schema:
@@ -62,6 +73,8 @@ class _TopicChannel:
     topic: str
     channel: foxglove.Channel
     encode: MessageEncoder
+    #: Sent at the display rate (a stream), or every message.
+    streamed: bool
     subscription: Subscription | None = None
 
 
@@ -85,6 +98,8 @@ class TopicChannels:
         context: the SDK context of the server (channels of other worlds stay apart).
         assets: the allowlist the arms' meshes are added to.
         on_time: called with the simulated time [ns] about every :data:`TIME_PERIOD_S`.
+        stream_period_s: simulated time between two instants of the streamed topics
+            [s]; None: every step.
     """
 
     def __init__(
@@ -93,8 +108,10 @@ class TopicChannels:
         context: foxglove.Context,
         assets: AssetLibrary,
         on_time: Callable[[int], None],
+        stream_period_s: float | None = None,
     ) -> None:
         self._world = world
+        self._stream_period_s = stream_period_s
         self._context = context
         self._assets = assets
         self._on_time = on_time
@@ -168,7 +185,8 @@ class TopicChannels:
     def _open_topic(self, topic: str, message_type: type) -> None:
         encode = encoder_for(message_type)
         channel = self._channel(topic, encode.schema, message_type.__name__)
-        entry = _TopicChannel(topic, channel, encode)
+        streamed = topic == TF_TOPIC or issubclass(message_type, STREAMED_TYPES)
+        entry = _TopicChannel(topic, channel, encode, streamed)
         self._topics[topic] = entry
         self._by_id[channel.id()] = entry
 
@@ -254,7 +272,8 @@ class TopicChannels:
             return
         if wanted and entry.subscription is None:  # the bus replays latched messages
             deliver = functools.partial(self._deliver, entry)
-            entry.subscription = self._world.bus.subscribe(entry.topic, deliver)
+            period = self._stream_period_s if entry.streamed else None
+            entry.subscription = self._world.bus.subscribe(entry.topic, deliver, period_s=period)
         elif wanted and subscribed:
             for message in self._world.bus.latched(entry.topic):
                 self._deliver(entry, message)

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import foxglove
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener, WebSocketServer
 
-from armfleet.checks.number_ranges import PORT_OR_FREE
+from armfleet.checks.number_ranges import FOXGLOVE_RATE_HZ, PORT_OR_FREE
 from armfleet.errors import ArmfleetError
 from armfleet.foxglove.assets import AssetLibrary
 from armfleet.foxglove.channels import JSON, TopicChannels
@@ -47,6 +47,9 @@ BACKLOG_MESSAGES = 1024
 STOP_WAIT_S = 2.0
 #: Name the server gives itself to its clients.
 SERVER_NAME = "armfleet"
+#: Instants of the streamed topics (``/tf``, joint and controller states) sent per
+#: simulated second: a display's rate, a tenth of the steps at the default 1 ms.
+DEFAULT_RATE_HZ = 100.0
 
 
 def check_host(host: object, option: str = "host") -> str:
@@ -87,15 +90,32 @@ class FoxgloveServer:
         port: TCP port, 0 for a free one (see :attr:`port`).
         host: address to listen on; 127.0.0.1 by default. Anything else lets other
             machines read the world and command its arms: pass it only on purpose.
+        rate_hz: instants of the streamed topics (``/tf``, joint, controller and gripper
+            states) sent per simulated second; None: every step. The other topics go
+            out as published.
 
     Raises:
-        FoxgloveError: bad host or port, the port is taken, or the world is closed.
+        FoxgloveError: bad host, port or rate, the port is taken, or the world is closed.
     """
 
-    def __init__(self, world: World, port: int = 0, *, host: str = DEFAULT_BIND) -> None:
+    def __init__(
+        self,
+        world: World,
+        port: int = 0,
+        *,
+        host: str = DEFAULT_BIND,
+        rate_hz: float | None = DEFAULT_RATE_HZ,
+    ) -> None:
         host = check_host(host)
         if not PORT_OR_FREE.contains(port):
             raise FoxgloveError(f"Foxglove port {port!r} is invalid; give {PORT_OR_FREE.valid}")
+        if rate_hz is not None and not FOXGLOVE_RATE_HZ.contains(rate_hz):
+            raise FoxgloveError(
+                f"Foxglove rate {rate_hz!r} is invalid; give {FOXGLOVE_RATE_HZ.valid}, or None "
+                "for every step"
+            )
+        #: Instants of the streamed topics sent per simulated second (None: every step).
+        self.rate_hz = None if rate_hz is None else float(rate_hz)
         if world.closed:
             raise FoxgloveError("cannot serve a closed world to Foxglove")
         self._world = world
@@ -103,7 +123,10 @@ class FoxgloveServer:
         self._context = foxglove.Context()
         self._assets = AssetLibrary()
         self._server: WebSocketServer | None = None
-        self._channels = TopicChannels(world, self._context, self._assets, self._broadcast_time)
+        period = None if self.rate_hz is None else 1.0 / self.rate_hz
+        self._channels = TopicChannels(
+            world, self._context, self._assets, self._broadcast_time, period
+        )
         self._lock = threading.Lock()
         try:
             self._server = foxglove.start_server(
@@ -230,6 +253,12 @@ def _is_ipv6(host: str) -> bool:
         return False
 
 
-def serve_foxglove(world: World, port: int = 0, *, host: str = DEFAULT_BIND) -> FoxgloveServer:
+def serve_foxglove(
+    world: World,
+    port: int = 0,
+    *,
+    host: str = DEFAULT_BIND,
+    rate_hz: float | None = DEFAULT_RATE_HZ,
+) -> FoxgloveServer:
     """Serve ``world`` to Foxglove; see :class:`FoxgloveServer`. Close it when done."""
-    return FoxgloveServer(world, port, host=host)
+    return FoxgloveServer(world, port, host=host, rate_hz=rate_hz)
