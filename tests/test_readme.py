@@ -38,6 +38,8 @@ PAGES = (
     "design.md",
     "planning.md",
     "sweeps.md",
+    "foxglove.md",
+    "envs.md",
 )
 #: Pages whose ``python`` blocks need more than this file gives them, and who runs them.
 RUN_ELSEWHERE = {
