@@ -22,7 +22,7 @@ from armfleet.arm_assembly import (
 from armfleet.bringup import BRINGUP_TOPIC, bring_up
 from armfleet.bus import Bus
 from armfleet.checks.flags import flag
-from armfleet.checks.number_ranges import PORT, RUN_DURATION_S
+from armfleet.checks.number_ranges import DEFAULT_FOXGLOVE_RATE_HZ, PORT, RUN_DURATION_S
 from armfleet.checks.real_numbers import real_number
 from armfleet.checks.time_step import check_dt
 from armfleet.contact_monitor import ContactMonitor
@@ -223,7 +223,11 @@ class World:
         return record(self, path, spec=spec, topics=topics)
 
     def serve_foxglove(
-        self, port: int = 0, *, host: str = "127.0.0.1", rate_hz: float | None = 100.0
+        self,
+        port: int = 0,
+        *,
+        host: str = "127.0.0.1",
+        rate_hz: float | None = DEFAULT_FOXGLOVE_RATE_HZ,
     ) -> FoxgloveServer:
         """Serve this world to Foxglove on ``ws://HOST:PORT`` (docs/foxglove.md).
 

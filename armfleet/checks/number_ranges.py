@@ -101,6 +101,8 @@ PORT_OR_FREE = NumberRange(0, 65535, "a TCP port (0: a free one)", integer=True)
 #: ``--foxglove-rate``: instants of the streamed topics sent per simulated second [Hz]; at
 #: or above the step rate (1,000 Hz at the default 1 ms) every step goes out.
 FOXGLOVE_RATE_HZ = NumberRange(0.1, 1e6, "a rate in Hz of simulated time")
+#: ... when not given: a display's rate, a tenth of the steps at the default 1 ms.
+DEFAULT_FOXGLOVE_RATE_HZ = 100.0
 #: A coordinate of a position in the world (an arm's base, an object, a pose goal) [m]:
 #: room for any cell. Far beyond it the whole world slows down: one arm spawned at
 #: x = 1e308 m cut a shared world's real-time factor from 1.00 to about 0.2.

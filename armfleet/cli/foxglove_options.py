@@ -1,4 +1,5 @@
-"""``--foxglove [PORT]`` and ``--foxglove-bind HOST`` of the commands that run a world."""
+"""``--foxglove [PORT]``, ``--foxglove-bind HOST`` and ``--foxglove-rate HZ`` of the commands
+that run a world."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from armfleet.checks.number_ranges import FOXGLOVE_RATE_HZ
+from armfleet.checks.number_ranges import DEFAULT_FOXGLOVE_RATE_HZ, FOXGLOVE_RATE_HZ
 from armfleet.cli.number_arguments import number_in, port_or_free
 from armfleet.cli.parser import UsageError
 from armfleet.remote.address import DEFAULT_BIND
@@ -17,9 +18,6 @@ if TYPE_CHECKING:
 
 #: The port ``--foxglove`` alone listens on: the one Foxglove proposes.
 DEFAULT_FOXGLOVE_PORT = 8765
-#: ``--foxglove-rate`` when not given (armfleet.foxglove.server.DEFAULT_RATE_HZ, not
-#: imported here: the SDK loads only for a world that serves Foxglove).
-DEFAULT_FOXGLOVE_RATE_HZ = 100.0
 
 
 def add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
@@ -44,7 +42,8 @@ def add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def check_foxglove_arguments(args: argparse.Namespace) -> None:
-    """Raise for a ``--foxglove-bind`` that is no address, or one without ``--foxglove``."""
+    """Raise for a ``--foxglove-bind`` that is no address, or a ``--foxglove-bind`` or
+    ``--foxglove-rate`` without ``--foxglove``."""
     bind = getattr(args, "foxglove_bind", DEFAULT_BIND)
     if getattr(args, "foxglove", None) is None:
         if bind != DEFAULT_BIND:

@@ -31,6 +31,7 @@ _NEW_WORLD_OPTIONS = (
     ("--no-api", "no_api", False),
     ("--foxglove", "foxglove", None),
     ("--foxglove-bind", "foxglove_bind", DEFAULT_BIND),
+    ("--foxglove-rate", "foxglove_rate", None),
 )
 
 

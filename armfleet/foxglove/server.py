@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import foxglove
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener, WebSocketServer
 
-from armfleet.checks.number_ranges import FOXGLOVE_RATE_HZ, PORT_OR_FREE
+from armfleet.checks.number_ranges import DEFAULT_FOXGLOVE_RATE_HZ, FOXGLOVE_RATE_HZ, PORT_OR_FREE
 from armfleet.errors import ArmfleetError
 from armfleet.foxglove.assets import AssetLibrary
 from armfleet.foxglove.channels import JSON, TopicChannels
@@ -48,8 +48,8 @@ STOP_WAIT_S = 2.0
 #: Name the server gives itself to its clients.
 SERVER_NAME = "armfleet"
 #: Instants of the streamed topics (``/tf``, joint and controller states) sent per
-#: simulated second: a display's rate, a tenth of the steps at the default 1 ms.
-DEFAULT_RATE_HZ = 100.0
+#: simulated second unless told.
+DEFAULT_RATE_HZ = DEFAULT_FOXGLOVE_RATE_HZ
 
 
 def check_host(host: object, option: str = "host") -> str:
