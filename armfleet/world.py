@@ -222,6 +222,7 @@ class World:
 
         return record(self, path, spec=spec, topics=topics)
 
+    @owning  # it subscribes to the bus: never from another thread during a step
     def serve_foxglove(
         self,
         port: int = 0,
@@ -247,7 +248,9 @@ class World:
             closes with the world.
 
         Raises:
-            FoxgloveError: bad host or port, the port is taken, or the world is closed.
+            FoxgloveError: bad host, port or rate, the port is taken, or the world is closed.
+            WorldBusy: called from inside a step (a bus subscriber), or from another
+                thread while one steps the world (hand it over with :meth:`submit`).
         """
         from armfleet.foxglove import FoxgloveServer  # foxglove-sdk only loaded when asked for
 

@@ -268,9 +268,11 @@ def test_a_topic_costs_nothing_until_a_client_subscribes(served: Served) -> None
     client = served.client()
     assert served.run(lambda: served.server.listened) == []  # connected, not subscribed
     client.subscribe("/tf", "/bob/position_controller/state")
-    client.wait_for(lambda: len(client.messages["/bob/position_controller/state"]) > 5)
-    listened = served.run(lambda: (bus.has_subscribers("/tf"), served.server.listened))
-    assert listened == (True, ["/bob/position_controller/state", "/tf"])
+    client.wait_for(
+        lambda: all(len(client.messages[t]) > 5 for t in ("/tf", "/bob/position_controller/state"))
+    )  # computed now (at the display rate: has_subscribers is true at its instants only)
+    listened = served.run(lambda: served.server.listened)
+    assert listened == ["/bob/position_controller/state", "/tf"]
     client.unsubscribe("/tf")
     client.pump(0.3)
     assert served.run(lambda: served.server.listened) == ["/bob/position_controller/state"]
@@ -532,6 +534,44 @@ def test_streams_go_out_at_the_display_rate_one_whole_instant_at_a_time() -> Non
             world.step()
         assert sum(wanted) == 5, wanted
         client.close()
+
+
+def test_serving_from_inside_a_step_or_another_thread_is_refused_and_submit_works() -> None:
+    """serve_foxglove subscribes to the bus: like spawn, it is the stepping thread's."""
+    with armfleet.World() as world:
+        world.spawn("bob", at=(0, 0))
+        raised: list[BaseException] = []
+
+        def inside(message: object) -> None:
+            if not raised:
+                try:
+                    world.serve_foxglove(0)
+                except BaseException as exc:
+                    raised.append(exc)
+
+        subscription = world.bus.subscribe("/bob/joint_states", inside)
+        world.step()
+        subscription.cancel()
+        assert len(raised) == 1 and isinstance(raised[0], armfleet.WorldBusy), raised
+        with world.step_guard.owned("run"):  # as a loop stepping in this thread would
+            elsewhere: list[BaseException] = []
+            thread = threading.Thread(
+                target=lambda: _capture(elsewhere, lambda: world.serve_foxglove(0))
+            )
+            thread.start()
+            thread.join()
+        assert len(elsewhere) == 1 and isinstance(elsewhere[0], armfleet.WorldBusy), elsewhere
+        future = world.submit(lambda: world.serve_foxglove(0))
+        world.step()
+        assert future.result(timeout=1).url.startswith("ws://127.0.0.1:")
+        assert not world.bus.failures
+
+
+def _capture(into: list[BaseException], call: Callable[[], object]) -> None:
+    try:
+        call()
+    except BaseException as exc:
+        into.append(exc)
 
 
 def test_a_bad_rate_is_one_clear_error() -> None:
