@@ -228,7 +228,7 @@ def test_joint_states_and_tf_arrive_valid_against_their_advertised_schemas(
     client.wait_for(lambda: {"/bob/status", "/toby/status"} <= set(client.channels))
     topics = served.run(lambda: served.world.bus.topics)
     descriptions = {"/bob/robot_description", "/toby/robot_description"}
-    assert set(client.channels) == set(topics) | descriptions
+    assert set(client.channels) == set(topics) | descriptions | {"/scene_objects"}
     for topic, message_type in topics.items():
         schema = encoder_for(message_type).schema
         assert client.channels[topic]["schemaName"] == schema.name, topic

@@ -4,7 +4,8 @@ Every advertised topic of the world gets a Foxglove channel with the recording's
 schema and JSON encoding (:func:`armfleet.recording.encode.encoder_for`, the very
 encoders the MCAP recording uses), plus ``/<arm>/robot_description`` per arm
 (``std_msgs/msg/String``, the URDF with ``package://`` mesh URIs: see
-:mod:`armfleet.foxglove.assets`). A channel costs the world nothing until a client
+:mod:`armfleet.foxglove.assets`), and ``/scene_objects``, the objects' shapes
+(:mod:`armfleet.foxglove.scene_objects`). A channel costs the world nothing until a client
 subscribes: the Foxglove server's listener then asks the stepping thread (through
 ``world.submit``) to subscribe to the bus topic, and to drop that subscription when the
 last client leaves. So ``/tf`` and ``/<arm>/position_controller/state``, computed only
@@ -43,6 +44,7 @@ import foxglove
 from armfleet.bringup import BRINGUP_TOPIC
 from armfleet.errors import WorldClosed
 from armfleet.foxglove.assets import AssetLibrary
+from armfleet.foxglove.scene_objects import SCENE_OBJECTS_TOPIC, SceneObjects
 from armfleet.messages import ControllerState, GripperState, JointState
 from armfleet.recording.encode import MessageEncoder, StringEncoder, encoder_for, stamp_ns
 from armfleet.recording.schemas import MessageSchema
@@ -120,6 +122,7 @@ class TopicChannels:
         #: Channel id -> what it carries (read in the stepping thread only).
         self._by_id: dict[int, _TopicChannel | _DescriptionChannel] = {}
         self._watch: Subscription | None = None
+        self._scene = SceneObjects(world, context)
         self._last_time_ns = -1
         self._skipped: dict[str, int] = {}
         self._closed = False
@@ -130,9 +133,8 @@ class TopicChannels:
     @property
     def topics(self) -> list[str]:
         """The topics with a channel now, sorted."""
-        return sorted(
-            [*self._topics, *(f"/{name}/robot_description" for name in self._descriptions)]
-        )
+        descriptions = (f"/{name}/robot_description" for name in self._descriptions)
+        return sorted([*self._topics, *descriptions, SCENE_OBJECTS_TOPIC])
 
     @property
     def listened(self) -> list[str]:
@@ -160,6 +162,7 @@ class TopicChannels:
             self._close_topic(topic)
         for name in list(self._descriptions):
             self._close_description(name)
+        self._scene.close()
 
     # -- arms and topics coming and going (stepping thread) ---------------------------
     def _on_bringup(self, event: Any) -> None:
@@ -181,6 +184,7 @@ class TopicChannels:
         for name, arm in arms.items():
             if name not in self._descriptions:
                 self._open_description(arm)
+        self._scene.refresh()
 
     def _open_topic(self, topic: str, message_type: type) -> None:
         encode = encoder_for(message_type)
@@ -230,6 +234,8 @@ class TopicChannels:
         # channel on the next tick.
         if len(self._world.bus.topics) != len(self._topics):
             self.refresh()
+        else:
+            self._scene.refresh()  # objects added or removed since
         now = stamp_ns(self._world.time)
         if now - self._last_time_ns >= stamp_ns(TIME_PERIOD_S):
             self._last_time_ns = now
@@ -261,8 +267,14 @@ class TopicChannels:
     def _sync(self, channel_id: int, subscribed: bool) -> None:
         """Listen to the bus topic of ``channel_id`` if and only if a client does; send
         the latched messages to a client that just subscribed."""
+        if self._closed:
+            return
+        if channel_id == self._scene.channel_id:
+            if subscribed:
+                self._scene.resend()
+            return
         entry = self._by_id.get(channel_id)
-        if entry is None or self._closed:
+        if entry is None:
             return
         wanted = entry.channel.has_sinks()
         if isinstance(entry, _DescriptionChannel):
