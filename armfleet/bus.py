@@ -276,7 +276,8 @@ class Bus:
         return list(self._latched.get(topic, ()))
 
     def has_subscribers(self, topic: str) -> bool:
-        """Whether a message on ``topic`` would reach anyone (a subscriber or a tap)."""
+        """Whether a message on ``topic`` published now would reach anyone: a tap, or a
+        subscriber that takes every message or is due at this instant (``period_s``)."""
         if not (isinstance(topic, str) and topic in self._types):  # advertised: checked
             _check_name(topic)  # the controllers ask every step: not their own topics again
         subscribers = self._subscriptions.get(topic)
