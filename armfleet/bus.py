@@ -283,8 +283,8 @@ class Bus:
         subscribers = self._subscriptions.get(topic)
         if self._taps or not subscribers:
             return bool(self._taps)
-        if self._clock is None:
-            return True
+        if self._clock is None or any(s.period_s is None for s in subscribers):
+            return True  # asked every step by the publishers: no clock read for plain ones
         now = self._clock()
         return any(s.wants(now) for s in subscribers)
 

@@ -46,7 +46,7 @@ from types import FrameType
 from typing import Any
 
 import numpy as np
-from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
+from scenarios import grid_spawn, timed_run  # benchmarks/ is the script's folder
 
 import armfleet
 from armfleet.foxglove import FoxgloveServer
@@ -132,17 +132,6 @@ def run_client(url: str, mode: str) -> None:
 
 
 # -- the worlds ------------------------------------------------------------------------
-def timed_run(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> float:
-    """Run ``sim_s`` simulated seconds flat out, re-targeting every 0.5 s; the wall time [s]."""
-    wall = 0.0
-    for _ in range(round(sim_s / 0.5)):
-        retarget(world, rng)
-        started = time.perf_counter()
-        world.run(0.5)
-        wall += time.perf_counter() - started
-    return wall
-
-
 def start_client(url: str, mode: str) -> tuple[subprocess.Popen[str], int]:
     """A client process of ``mode``, once subscribed; and how many channels it took."""
     command = [sys.executable, __file__, "--client", url, "--client-mode", mode]

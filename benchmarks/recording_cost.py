@@ -28,12 +28,11 @@ import os
 import platform
 import statistics
 import tempfile
-import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
+from scenarios import grid_spawn, timed_run  # benchmarks/ is the script's folder
 
 import armfleet
 
@@ -58,17 +57,6 @@ class Result:
     mb_per_arm_minute: float
     rss_mb_before: float
     rss_mb_after: float
-
-
-def timed_run(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> float:
-    """Run ``sim_s`` simulated seconds flat out, re-targeting every 0.5 s; the wall time [s]."""
-    wall = 0.0
-    for _ in range(round(sim_s / 0.5)):
-        retarget(world, rng)
-        started = time.perf_counter()
-        world.run(0.5)
-        wall += time.perf_counter() - started
-    return wall
 
 
 def rss_mb() -> float:

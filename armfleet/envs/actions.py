@@ -30,6 +30,7 @@ from gymnasium import spaces
 
 from armfleet.arm import Arm
 from armfleet.checks.real_numbers import all_real
+from armfleet.envs.choices import choose
 from armfleet.envs.errors import InvalidAction, InvalidOption
 from armfleet.messages import FloatArray
 
@@ -48,12 +49,7 @@ class ActionKind(enum.Enum):
     @classmethod
     def parse(cls, value: object) -> ActionKind:
         """``value`` as a kind (the enum or its name); InvalidOption lists the kinds."""
-        if isinstance(value, ActionKind):
-            return value
-        for kind in cls:
-            if value == kind.value:
-                return kind
-        raise InvalidOption("action_kind", value, [kind.value for kind in cls])
+        return choose(cls, value, "action_kind")
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 
-from armfleet.envs.errors import InvalidOption
+from armfleet.envs.choices import choose
 
 
 class StopPolicy(enum.Enum):
@@ -24,9 +24,4 @@ class StopPolicy(enum.Enum):
 
     @classmethod
     def parse(cls, value: object) -> StopPolicy:
-        if isinstance(value, StopPolicy):
-            return value
-        for policy in cls:
-            if value == policy.value:
-                return policy
-        raise InvalidOption("on_stop", value, [policy.value for policy in cls])
+        return choose(cls, value, "on_stop")

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from armfleet.checks.real_numbers import real_number
+from armfleet.envs.choices import choose
 from armfleet.envs.errors import InvalidOption
 from armfleet.envs.tasks.task import Evaluation, Task
 from armfleet.messages import FloatArray
@@ -50,12 +51,7 @@ class RewardKind(enum.Enum):
 
     @classmethod
     def parse(cls, value: object) -> RewardKind:
-        if isinstance(value, RewardKind):
-            return value
-        for kind in cls:
-            if value == kind.value:
-                return kind
-        raise InvalidOption("reward", value, [kind.value for kind in cls])
+        return choose(cls, value, "reward")
 
 
 class HandoverTask(Task):
