@@ -222,7 +222,8 @@ def test_a_new_plan_replaces_the_line(viewed: armfleet.World) -> None:
         settle(world, bob)
         settle(world, toby)
         watcher.wait_for(lambda scene: not scene.nodes_under("/meshcat/armfleet/bob/planned"))
-        assert line_path("toby") not in watcher.state.objects
+        # toby's delete is sent on its own: wait for it too (asserting at once raced it).
+        watcher.wait_for(lambda scene: line_path("toby") not in scene.objects)
     assert viewer.planned_motions == {}
 
 
