@@ -3,14 +3,22 @@
 >>> import armfleet
 >>> world = armfleet.World()
 >>> bob = world.spawn("bob", model="panda", at=(0, 0))
+
+The public API. Importing it loads the core (PyBullet, Pinocchio, Ruckig, OMPL); the live
+API's client and sweeps load on first use (``armfleet.connect``, ``armfleet.sweep``), and
+the optional extras (Ray, pyarrow, Foxglove, Gymnasium, PettingZoo, matplotlib) only in
+the features that need them. docs/design.md shows the package's rooms.
 """
 
-from armfleet.quiet_pybullet import import_quietly
+from typing import TYPE_CHECKING, Any
+
+from armfleet.physics.quiet_pybullet import import_quietly
 
 import_quietly()
 
-from armfleet.arm import Arm
-from armfleet.bus import Bus
+from armfleet._version import __version__
+from armfleet.arms.arm import Arm
+from armfleet.arms.gripper import Gripper
 from armfleet.errors import (
     ArmfleetError,
     ArmInMotion,
@@ -30,8 +38,7 @@ from armfleet.errors import (
     WorldBusy,
     WorldClosed,
 )
-from armfleet.gripper import Gripper
-from armfleet.launch import launch
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import (
     ArmMode,
     BringupEvent,
@@ -56,13 +63,36 @@ from armfleet.recording import (
     plot_recording,
     record,
 )
-from armfleet.remote import connect
-from armfleet.spawn_pose import SpawnPose
+from armfleet.runtime.bus import Bus
 from armfleet.spec import FleetSpec, SpecError, load_spec
-from armfleet.sweeps import SweepError, SweepResult, sweep
 from armfleet.world import World
+from armfleet.world.launch import launch
 
-__version__ = "0.1.0"
+if TYPE_CHECKING:
+    from armfleet.remote import connect
+    from armfleet.sweeps.errors import SweepError
+    from armfleet.sweeps.sweep import SweepResult, sweep
+
+#: Public names whose package loads on first use: name -> module.
+_ON_FIRST_USE = {
+    "connect": "armfleet.remote",
+    "sweep": "armfleet.sweeps",
+    "SweepError": "armfleet.sweeps",
+    "SweepResult": "armfleet.sweeps",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Load the live API's client and the sweeps only when first asked for (PEP 562)."""
+    module = _ON_FIRST_USE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'armfleet' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "Arm",

@@ -39,7 +39,7 @@ class UnknownModel(ArmfleetError):
 
 
 class InvalidArmName(ArmfleetError):
-    """An arm name that breaks the naming rule of :mod:`armfleet.names`.
+    """An arm name that breaks the naming rule of :mod:`armfleet.checks.names`.
 
     Attributes:
         name: what was given.
@@ -292,7 +292,7 @@ class StartPoseCollision(ArmfleetError):
 
 class ObjectCollision(ObjectError):
     """A scene object that would touch an arm, or overlap the floor or another object,
-    where it is added (see :mod:`armfleet.object_clearance`).
+    where it is added (see :mod:`armfleet.objects.object_clearance`).
 
     Attributes:
         other: the arm, object or ``"ground"`` in the way.
@@ -388,4 +388,15 @@ class ArmInMotion(ArmfleetError):
         super().__init__(
             f"{arm} is moving; {what} starts from rest: wait until arm.is_moving is False "
             "(the current motion goes on)"
+        )
+
+
+class MissingExtra(ArmfleetError):
+    """An optional feature whose extra (its optional dependencies) is not installed."""
+
+    def __init__(self, feature: str, extra: str, missing: str) -> None:
+        self.feature, self.extra, self.missing = feature, extra, missing
+        super().__init__(
+            f"{feature} needs armfleet's '{extra}' extra ({missing} is not installed): "
+            f"pip install 'armfleet[{extra}]' (from a clone: pip install '.[{extra}]')"
         )

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armfleet.launch import add_from_spec, spawn_from_spec
+from armfleet.world.launch import add_from_spec, spawn_from_spec
 from armfleet.messages import CollisionReport, FloatArray
 from armfleet.spec import FleetSpec
 

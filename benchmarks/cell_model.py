@@ -1,7 +1,7 @@
 """The reference collision model of a world for the planning benchmarks: every arm and
 object in one Pinocchio model with coal geometry, checked with Pinocchio's broadphase.
 
-What counts as a collision, as in PyBullet (:mod:`armfleet.collision_filter`):
+What counts as a collision, as in PyBullet (:mod:`armfleet.physics.collision_filter`):
 every pair of collision objects except two on one joint (so two static things never
 count), two on a parent and child joint, and the link pairs that never touch (sampled).
 Meshes are replaced by their convex hulls: PyBullet collides a mesh as its convex

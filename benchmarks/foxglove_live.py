@@ -49,7 +49,7 @@ import numpy as np
 from scenarios import grid_spawn, timed_run  # benchmarks/ is the script's folder
 
 import armfleet
-from armfleet.foxglove import FoxgloveServer
+from armfleet.foxglove import FoxgloveServer, serve_foxglove
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "foxglove_live.json"
@@ -146,8 +146,8 @@ def start_client(url: str, mode: str) -> tuple[subprocess.Popen[str], int]:
 def serve(world: armfleet.World, mode: str) -> FoxgloveServer:
     """``world`` served as ``mode`` wants: its streams at every step, or at the default."""
     if mode in EVERY_STEP:
-        return world.serve_foxglove(0, rate_hz=None)
-    return world.serve_foxglove(0)
+        return serve_foxglove(world, 0, rate_hz=None)
+    return serve_foxglove(world, 0)
 
 
 def measure(count: int, chunk_s: float, repeats: int) -> Result:

@@ -7,7 +7,7 @@ it track: ~3e-5 rad, see docs/performance.md), with the URDF effort limits as fo
 Targets are drawn as the fleet benchmark draws armfleet's, with the same limits.
 
 It stands on armfleet's floor slab, so that only the arms differ (PyBullet's
-``plane.urdf`` would cost the peer about 7 µs per Panda more: armfleet/ground.py).
+``plane.urdf`` would cost the peer about 7 µs per Panda more: armfleet/physics/ground.py).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 import pybullet as p
 import ruckig
 
-from armfleet.ground import create_ground
+from armfleet.physics.ground import create_ground
 
 PANDA_URDF = (
     Path(sysconfig.get_paths()["purelib"])

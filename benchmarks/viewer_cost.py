@@ -36,6 +36,7 @@ from scenarios import grid_spawn, retarget  # benchmarks/ is the script's folder
 
 import armfleet
 import armfleet.viewer
+from armfleet.viewer import Viewer
 from armfleet.viewer.headless_chromium import CHROMIUM, CHROMIUM_FLAGS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -133,7 +134,7 @@ def timed_run(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> 
 def tick_cost_us(world: armfleet.World, calls: int = 200_000) -> float:
     """Mean cost of ``Viewer.tick`` when no frame is due [us]."""
     viewer = world.viewer
-    assert viewer is not None
+    assert isinstance(viewer, Viewer)
     started = time.perf_counter()
     for _ in range(calls):
         viewer.tick(world)

@@ -5,7 +5,7 @@
     python examples/handover.py --runs 20        # 20 seeded runs, bar moved a little each time
 
 The scene is launch_specs/handover.yaml; the choreography is the handover scenario
-(armfleet/sweeps/scenarios/handover.py), which ``armfleet sweep handover`` runs for
+(armfleet/scenarios/handover.py), which ``armfleet sweep handover`` runs for
 many seeds on Ray.
 """
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import armfleet
-from armfleet.sweeps.scenarios.handover import (
+from armfleet.scenarios.handover import (
     TOLERANCE_M,
     Watch,
     hand_over,

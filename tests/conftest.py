@@ -12,7 +12,7 @@ import pytest
 
 import armfleet
 from armfleet.description import ModelLibrary
-from armfleet.spawn_pose import SpawnPose
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
 from tests.failure_artifacts import artifacts_root, folder_for, save_artifacts
 

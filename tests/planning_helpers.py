@@ -25,6 +25,14 @@ BOB_SWAP_TOOL_M = (0.6, 0.15, 0.4)
 TOBY_SWAP_TOOL_M = (0.3, -0.15, 0.4)
 
 
+def tool_position(arm: armfleet.Arm, positions: FloatArray) -> FloatArray:
+    """World position of ``arm``'s tool0 with its arm joints at ``positions`` [m]
+    (Pinocchio's forward kinematics of its model, the other joints where they are)."""
+    q = arm.body.position.copy()
+    q[arm.kinematics.arm_indices] = positions
+    return np.asarray(arm.ik.frame_pose(arm.description.tool0, q).translation, dtype=float)
+
+
 def tool_down(xyz: tuple[float, float, float], yaw: float = 0.0) -> FloatArray:
     """A 4x4 world pose at ``xyz`` [m] with z pointing down, turned by ``yaw`` [rad]."""
     pose = np.eye(4)

@@ -20,6 +20,7 @@ import pybullet as p
 import pytest
 
 import armfleet
+from armfleet.checks.names import ARM_NAME_PATTERN
 from armfleet.controllers import PositionController
 from armfleet.errors import (
     ArmfleetError,
@@ -34,7 +35,6 @@ from armfleet.errors import (
     UnknownModel,
 )
 from armfleet.messages import FloatArray, JointCommand
-from armfleet.names import ARM_NAME_PATTERN
 
 #: A settled arm's joints drift less than this over HOLD_CHECK_S [rad].
 HOLD_DRIFT_RAD = 1e-4

@@ -35,7 +35,6 @@ import pybullet as p
 import pytest
 
 import armfleet
-from armfleet.bus import BusError, TopicError
 from armfleet.errors import (
     ArmfleetError,
     NoGripper,
@@ -48,9 +47,10 @@ from armfleet.errors import (
     UnreachablePose,
     WorldBusy,
 )
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.recording import RecordingError
 from armfleet.recording.errors import DamagedRecording, NotARecording
-from armfleet.spawn_pose import SpawnPose
+from armfleet.runtime.bus import BusError, TopicError
 from armfleet.spec import ArmSpec, FleetSpec, SpecError, load_spec
 from tests.test_bad_input import (  # noqa: F401  (scene: a fixture)
     HOLD_CHECK_S,

@@ -20,7 +20,7 @@ import pytest
 import zmq
 
 import armfleet
-from armfleet.remote.protocol import MAX_IN_FLIGHT_PER_CLIENT, MAX_QUEUE_SIZE
+from armfleet.services.protocol import MAX_IN_FLIGHT_PER_CLIENT, MAX_QUEUE_SIZE
 from tests.remote_world import WorldProcess, wait_until
 
 #: How still a holding arm stays between two reads [rad]: its controller's hold tolerance.

@@ -22,6 +22,7 @@ import pybullet as p
 import pytest
 
 import armfleet
+from armfleet.checks.names import MAX_NAME_LENGTH
 from armfleet.errors import (
     ArmfleetError,
     FrameInUse,
@@ -31,7 +32,6 @@ from armfleet.errors import (
     StartPoseCollision,
 )
 from armfleet.messages import ArmMode
-from armfleet.names import MAX_NAME_LENGTH
 from armfleet.remote import RemoteError
 from tests.remote_world import ARMFLEET, WorldProcess, cli, runtime_env
 

@@ -3,7 +3,7 @@ it names), reading it is one line naming the file, the line where known and what
 be valid, exit code 2 from ``armfleet launch --check``, and never a traceback.
 
 Each case goes through the Python loader (:func:`armfleet.load_spec`) and through the
-CLI in a subprocess. The bounds checked are those of :mod:`armfleet.located_yaml`
+CLI in a subprocess. The bounds checked are those of :mod:`armfleet.checks.located_yaml`
 (1 MB, 32 levels, 100,000 values after aliases); the files are built well past them.
 """
 
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from armfleet.located_yaml import MAX_DEPTH, MAX_DOCUMENT_BYTES, MAX_NODES
+from armfleet.checks.located_yaml import MAX_DEPTH, MAX_DOCUMENT_BYTES, MAX_NODES
 from armfleet.spec import SpecError, load_spec, parse_spec
 
 ARMFLEET = (sys.executable, "-m", "armfleet.cli.main")

@@ -12,12 +12,12 @@ import pytest
 import yaml
 
 import armfleet
-from armfleet.bus import Bus, TopicError
 from armfleet.controllers.parameters import controller_file, load_parameters
 from armfleet.controllers.registry import CONTROLLER_TYPES
+from armfleet.description.data_folders import data_dir
 from armfleet.errors import ParameterError
 from armfleet.messages import ControllerState, JointCommand, JointState
-from armfleet.paths import data_dir
+from armfleet.runtime.bus import Bus, TopicError
 
 # -- bus ------------------------------------------------------------------------------------
 

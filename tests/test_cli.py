@@ -22,12 +22,12 @@ from pathlib import Path
 import pytest
 
 import armfleet
+from armfleet.checks.names import ARM_NAME_PATTERN
 from armfleet.cli.main import build_parser
 from armfleet.description import ModelLibrary
+from armfleet.description.data_folders import data_dir
+from armfleet.frames.spawn_pose import AT_SYNTAX
 from armfleet.messages import BringupStage
-from armfleet.names import ARM_NAME_PATTERN
-from armfleet.paths import data_dir
-from armfleet.spawn_pose import AT_SYNTAX
 
 ARMFLEET = (sys.executable, "-m", "armfleet.cli.main")
 #: Generous: a run of 1 simulated second plus start-up; only a hang reaches it.

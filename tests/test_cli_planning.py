@@ -25,7 +25,7 @@ import pytest
 import armfleet
 from armfleet.messages import CollisionReport, JointState
 from armfleet.remote import Client
-from armfleet.remote.protocol import MAX_QUEUE_SIZE
+from armfleet.services.protocol import MAX_QUEUE_SIZE
 from tests.remote_world import WorldProcess, cli, wait_until
 
 #: A settled arm is this close to its target [rad] (the CLI tests' holding figure).

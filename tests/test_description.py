@@ -19,12 +19,12 @@ from pathlib import Path
 import pytest
 
 from armfleet.description import ModelLibrary, ResourceResolver
+from armfleet.description.data_folders import DATA_FOLDERS, data_dir
 from armfleet.description.model_library import UPSTREAM_PROPERTY, XACRO_SUFFIX
 from armfleet.description.resource_resolver import PACKAGE_PATH_ENV, default_share_dirs
 from armfleet.description.upstream_macro import XACRO_NS
 from armfleet.errors import DescriptionError, ResourceNotFound, UnknownModel
-from armfleet.paths import DATA_FOLDERS, data_dir
-from armfleet.spawn_pose import SpawnPose
+from armfleet.frames.spawn_pose import SpawnPose
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 PREFIX = "bob_"
@@ -410,7 +410,7 @@ def test_installed_wheel_finds_its_data_without_the_source_tree(
         # without it, this Python sees only the unpacked wheel's armfleet.
         "import sys; sys.meta_path[:] = [f for f in sys.meta_path"
         " if not type(f).__module__.startswith('_editable_skbc_')];"
-        "import armfleet, armfleet.paths as paths;"
+        "import armfleet, armfleet.description.data_folders as paths;"
         "from armfleet.description import ModelLibrary;"
         "print(armfleet.__file__); print(paths.data_dir('description'));"
         "print(' '.join(ModelLibrary().names))"

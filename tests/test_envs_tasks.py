@@ -17,7 +17,7 @@ from armfleet.envs import HandoverEnv, MultiArmEnv, ReachEnv
 from armfleet.envs.poses import rotation_from_rpy
 from armfleet.envs.tasks.handover_task import HandoverTask
 from armfleet.envs.tasks.reach_task import ReachTask
-from armfleet.sweeps.scenarios.handover import (
+from armfleet.scenarios.handover import (
     HANDOVER_AT_M,
     MAT_TO_BAR_CENTRE_M,
     frame,

@@ -12,7 +12,7 @@ import pytest
 
 import armfleet
 from armfleet.errors import FrameInUse
-from armfleet.frame_registry import FrameOwner, FrameRegistry
+from armfleet.frames.frame_registry import FrameOwner, FrameRegistry
 from armfleet.spec import SpecError, parse_spec
 
 #: Two computations of one rigid frame (Pinocchio vs PyBullet, float64) agree to [m].

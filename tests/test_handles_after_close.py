@@ -23,9 +23,9 @@ import pytest
 
 import armfleet
 from armfleet.errors import ArmfleetError, UnknownArm, UnknownObject, WorldClosed
+from armfleet.frames.tf_tree import TfTree
 from armfleet.messages import GripperCommand, JointCommand
 from armfleet.remote import RemoteError
-from armfleet.tf_tree import TfTree
 from tests.test_remote_python_server import Served, served  # noqa: F401  (served: a fixture)
 
 #: A settled arm's joints drift less than this over 0.2 s [rad] (test_bad_input's figure).

@@ -14,6 +14,7 @@ import pytest
 
 import armfleet
 from armfleet.messages import JointState, PlannedMotion
+from tests.planning_helpers import tool_position
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "handover.py"
 
@@ -61,7 +62,7 @@ def test_transfers_are_planned(handover: ModuleType) -> None:
 
             def record(state: JointState) -> None:
                 columns = [state.name.index(name) for name in handle.joint_names]
-                tool = handle.tool_position(np.asarray(state.position)[columns])
+                tool = tool_position(handle, np.asarray(state.position)[columns])
                 during_plan = any(
                     p.stamp <= state.stamp <= p.stamp + p.time_from_start[-1] for p in planned[arm]
                 )

@@ -28,6 +28,7 @@ import pytest
 
 import armfleet
 from armfleet.description import ModelLibrary
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import (
     ArmMode,
     BringupEvent,
@@ -36,7 +37,6 @@ from armfleet.messages import (
     ControllerState,
     FloatArray,
 )
-from armfleet.spawn_pose import SpawnPose
 from tests.viewer_helpers import SceneState, SceneWatcher, expected_visual_poses, mesh_loader
 
 MODEL_NAMES = ModelLibrary().names

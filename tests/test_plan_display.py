@@ -57,7 +57,7 @@ def line_path(arm: str) -> str:
 
 
 def viewer_of(world: armfleet.World) -> Viewer:
-    assert world.viewer is not None, world.viewer_error
+    assert isinstance(world.viewer, Viewer), world.viewer_error
     return world.viewer
 
 

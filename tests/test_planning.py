@@ -33,6 +33,7 @@ from tests.planning_helpers import (
     shared_cell,
     swap_goals,
     tool_down,
+    tool_position,
 )
 
 #: PyBullet's hulls are up to 2 mm fatter than the planner's (test_planning_scene.py), and
@@ -491,7 +492,7 @@ def box_on_the_path(world: armfleet.World, fraction: float) -> None:
     trajectory = bob.position_controller.trajectory
     assert trajectory is not None
     rows = trajectory.remaining_positions(bob.position_controller.period)
-    ahead = bob.tool_position(rows[int(fraction * (len(rows) - 1))])
+    ahead = tool_position(bob, rows[int(fraction * (len(rows) - 1))])
     world.add_object("obstacle", "box", size=(0.12, 0.12, 0.12), at=tuple(ahead), mass=0.0)
 
 
@@ -521,7 +522,7 @@ def test_a_plan_made_before_the_world_changed_is_refused() -> None:
         bob = world.arm("bob")
         plan = bob.plan(bob_goal_across(world))
         samples = plan.timing.sample(bob.position_controller.period).position
-        ahead = bob.tool_position(samples[len(samples) // 2])
+        ahead = tool_position(bob, samples[len(samples) // 2])
         world.add_object("obstacle", "box", size=(0.12, 0.12, 0.12), at=tuple(ahead), mass=0.0)
         world.step()
         before = bob.positions

@@ -8,7 +8,7 @@ no step) and PyBullet's ``getClosestPoints`` measures every pair that counts:
 - between different bodies (arm and arm, arm and object, arm and floor), the pairs in
   which a link moves, against the clearance ``c``;
 - within one arm, the link pairs the world counts as contacts (not adjacent, not ruled
-  out by sampling: :func:`armfleet.collision_filter.ignored_self_pairs`), against the
+  out by sampling: :func:`armfleet.physics.collision_filter.ignored_self_pairs`), against the
   arm's own margin ``min(c, 10 mm)``.
 
 ``CollisionChecker.valid`` must say False whenever PyBullet finds a pair closer than its
@@ -34,11 +34,11 @@ import pybullet as p
 import pytest
 
 import armfleet
-from armfleet.collision_filter import ignored_self_pairs
 from armfleet.messages import FloatArray
+from armfleet.physics.collision_filter import ignored_self_pairs
+from armfleet.physics.start_clearance import BodyKind
 from armfleet.planning import FailureReason, PlanningFailed
 from armfleet.planning.scene import SELF_CLEARANCE_M, CollisionChecker
-from armfleet.start_clearance import BodyKind
 
 #: Difference allowed between PyBullet's and the scene's shapes [m] (see the module doc).
 HULL_TOLERANCE_M = 2.5e-3

@@ -147,7 +147,7 @@ def test_after_kill_9_the_default_reader_gets_nothing_and_recover_gets_everythin
         except EndOfFile:
             pass
     assert metadata == source_metadata
-    assert {name for name, _ in metadata} >= {"armfleet.run", "armfleet.arm"}
+    assert {name for name, _ in metadata} >= {"armfleet.run", "armfleet.arms.arm"}
 
 
 def test_recovered_channels_and_schemas_are_the_originals(killed: Killed) -> None:

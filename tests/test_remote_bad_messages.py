@@ -15,7 +15,7 @@ import zmq
 
 import armfleet
 from armfleet.description import ModelLibrary
-from armfleet.remote.protocol import MAX_REQUEST_BYTES, PROTOCOL_VERSION
+from armfleet.services.protocol import MAX_REQUEST_BYTES, PROTOCOL_VERSION
 from tests.remote_world import WorldProcess, wait_until
 
 #: How still a holding arm stays between two reads [rad]: its controller's hold tolerance.

@@ -23,7 +23,7 @@ import pytest
 import zmq
 
 import armfleet
-from armfleet.remote.protocol import MAX_IN_FLIGHT_PER_CLIENT
+from armfleet.services.protocol import MAX_IN_FLIGHT_PER_CLIENT
 from tests.remote_world import WorldProcess, wait_until
 
 #: Longest a test waits for replies before calling them missing [s]: a generous bound

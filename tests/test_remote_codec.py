@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from armfleet import messages
+from armfleet.checks.network_address import AddressError, is_loopback, normalize_address
 from armfleet.messages import (
     ArmMode,
     ArmStatus,
@@ -26,8 +27,7 @@ from armfleet.messages import (
     TFMessage,
     TransformStamped,
 )
-from armfleet.remote.address import AddressError, is_loopback, normalize_address
-from armfleet.remote.codec import (
+from armfleet.services.codec import (
     decode_message,
     message_types,
     pack,
@@ -35,10 +35,10 @@ from armfleet.remote.codec import (
     unpack,
     unpack_request,
 )
-from armfleet.remote.errors import ProtocolError
-from armfleet.remote.protocol import MAX_REQUEST_BYTES
-from armfleet.remote.run_state import RunState
-from armfleet.remote.subscription_queue import SubscriptionQueue
+from armfleet.services.errors import ProtocolError
+from armfleet.services.protocol import MAX_REQUEST_BYTES
+from armfleet.services.run_state import RunState
+from armfleet.services.subscription_queue import SubscriptionQueue
 
 NAMES = ("bob_panda_joint1", "bob_panda_joint2")
 STATE = JointState(1.5, NAMES, np.array([0.1, -0.2]), np.array([0.0, 1.0]), np.array([2.0, -3.0]))

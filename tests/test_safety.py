@@ -104,7 +104,7 @@ def test_folding_the_wrist_into_the_forearm_stops_the_arm() -> None:
     """A Panda's wrist (link7) driven into its forearm (link5) by the wrist joint alone.
 
     The upstream SRDF disables link5-link7, so before the sampled contact pairs
-    (armfleet/simulated_body/contact_pairs.py) this self-contact raised no stop and the
+    (armfleet/physics/contact_pairs.py) this self-contact raised no stop and the
     wrist pushed 9 mm into the forearm at the joint's limit."""
     with armfleet.World() as world:
         arm = world.spawn("bob")

@@ -14,9 +14,9 @@ from armfleet.cli.spawn_command import spec_from_arguments
 from armfleet.controllers.parameters import controller_file, load_parameters
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
-from armfleet.launch import launch
-from armfleet.paths import data_dir
+from armfleet.description.data_folders import data_dir
 from armfleet.spec import FleetSpec, SpecError, load_spec, parse_spec
+from armfleet.world.launch import launch
 
 SHIPPED_SPECS = sorted(data_dir("launch_specs").glob("*.yaml"))
 SHIPPED_CONTROLLER_FILES = sorted(data_dir("controllers").glob("*.yaml"))

@@ -21,7 +21,7 @@ import pybullet as p
 import pytest
 
 import armfleet
-from armfleet.arm_assembly import start_positions
+from armfleet.arms.arm_assembly import start_positions
 from armfleet.errors import (
     ArmfleetError,
     ObjectCollision,
@@ -29,12 +29,12 @@ from armfleet.errors import (
     StartPoseCollision,
     UnknownFrame,
 )
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.kinematics import ArmKinematics
-from armfleet.object_clearance import RESTING_OVERLAP_M
 from armfleet.objects import ObjectSpec, Shape, object_spec
-from armfleet.spawn_pose import SpawnPose
+from armfleet.objects.object_clearance import RESTING_OVERLAP_M
+from armfleet.physics.start_clearance import CLEARANCE_M
 from armfleet.spec import ArmSpec, FleetSpec, SpecError, parse_spec
-from armfleet.start_clearance import CLEARANCE_M
 from tests.remote_world import ARMFLEET, runtime_env
 
 #: A settled arm's joints drift less than this over the checks' 0.3 s [rad].
@@ -242,7 +242,7 @@ def test_a_spec_points_at_the_line_to_change(extra: str, field: str, line: int, 
     assert says in raised.value.problem
 
 
-# -- scene objects: the same question, asked of an object (armfleet/object_clearance.py) ------
+# -- scene objects: the same question, asked of an object (objects/object_clearance.py) --
 #: A 10 cm box, as the tests below place it [m].
 SIDE_M = 0.1
 

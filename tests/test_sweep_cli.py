@@ -70,7 +70,7 @@ def test_bad_input_is_one_line_and_exit_2_before_anything_starts(
     args = {
         "unknown scenario": ["handvoer", "--runs", "3"],
         "task not callable": [
-            str(_with_task(tmp_path, "armfleet.sweeps.scenarios.handover:TOLERANCE_M")),
+            str(_with_task(tmp_path, "armfleet.scenarios.handover:TOLERANCE_M")),
             "--runs",
             "3",
         ],
@@ -98,7 +98,7 @@ def _with_task(folder: Path, task: str) -> Path:
 def _outside_schema(folder: Path) -> Path:
     path = folder / "gains.yaml"
     path.write_text(
-        "spec: handover\ntask: armfleet.sweeps.scenarios.handover:handover\nrandomize:\n"
+        "spec: handover\ntask: armfleet.scenarios.handover:handover\nrandomize:\n"
         "  arms.bob.controllers.position_controller.velocity_scaling: {uniform: [0.5, 1.2]}\n"
     )
     return path

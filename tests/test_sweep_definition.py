@@ -22,7 +22,7 @@ from armfleet.sweeps.results_file import ResultsWriter
 from armfleet.sweeps.results_schema import SweepMetadata
 from armfleet.sweeps.sweep import sweep
 
-TASK = "armfleet.sweeps.scenarios.handover:handover"
+TASK = "armfleet.scenarios.handover:handover"
 
 
 def write_sweep(folder: Path, randomize: str = "", extra: str = "", task: str = TASK) -> Path:
@@ -184,8 +184,8 @@ def test_a_sweep_file_names_its_spec_and_is_checked_at_its_lines(tmp_path: Path)
 @pytest.mark.parametrize(
     ("task", "words"),
     [
-        ("armfleet.sweeps.scenarios.handover:TOLERANCE_M", "is a float, not a function"),
-        ("armfleet.sweeps.scenarios.handover:nothing", "no 'nothing' in it; its functions:"),
+        ("armfleet.scenarios.handover:TOLERANCE_M", "is a float, not a function"),
+        ("armfleet.scenarios.handover:nothing", "no 'nothing' in it; its functions:"),
         ("armfleet.no_such_module:task", "cannot import 'armfleet.no_such_module'"),
         ("handover", "give module:function"),
         ("missing.py", "task file 'missing.py' not found"),

@@ -15,10 +15,10 @@ from ompl import util as ou
 import armfleet
 from armfleet.messages import ArmMode
 from armfleet.planning import PoseGoal
+from armfleet.scenarios.crossing import Crossing, cross, crossing, draw_crossing
+from armfleet.scenarios.reach import reach, reach_targets, spawn_row
+from armfleet.scenarios.reach_targets import draw_row_targets, draw_targets, pose_error
 from armfleet.sweeps.definition import load_sweep
-from armfleet.sweeps.scenarios.crossing import Crossing, cross, crossing, draw_crossing
-from armfleet.sweeps.scenarios.reach import reach, reach_targets, spawn_row
-from armfleet.sweeps.scenarios.reach_targets import draw_row_targets, draw_targets, pose_error
 
 #: The task's tolerances: a reach target within 5 mm and 2 degrees, a crossing goal
 #: within 1 mm and 0.5 degrees.
@@ -54,7 +54,7 @@ def test_reach_targets_are_poses_an_arm_can_be_brought_up_in() -> None:
     """Each target's configuration passes the world's own start-pose check (nothing
     within 1 mm of the arm itself or the floor), and an arm brought up there has its
     tool0 on /tf at the target (bring-up moves a link by at most 0.025 mm:
-    armfleet.start_clearance)."""
+    armfleet.physics.start_clearance)."""
     with launched("reach") as world, launched("reach") as check:
         (arm,) = spawn_row(world, 1, 1.0)
         targets = draw_targets(arm, np.random.default_rng(7), 8)

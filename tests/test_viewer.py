@@ -55,7 +55,7 @@ def viewed() -> Iterator[armfleet.World]:
 
 
 def viewer_of(world: armfleet.World) -> Viewer:
-    assert world.viewer is not None, world.viewer_error
+    assert isinstance(world.viewer, Viewer), world.viewer_error
     return world.viewer
 
 

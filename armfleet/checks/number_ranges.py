@@ -117,3 +117,17 @@ REPLAY_SPEED = NumberRange(0.001, 1000.0, "a factor (times real time)")
 CLEARANCE_M = NumberRange(0.001, 0.5, "metres")
 #: The time budget of one planning request [s].
 PLANNING_TIMEOUT_S = NumberRange(0.001, 60.0, "seconds")
+
+# Sweeps (here, not in armfleet.sweeps, so that the CLI checks them without loading Ray).
+#: Most runs of one sweep.
+MAX_SWEEP_RUNS = 10_000_000
+#: Runs of a sweep.
+SWEEP_RUNS = NumberRange(1, MAX_SWEEP_RUNS, "runs", integer=True)
+#: Runs at once.
+SWEEP_WORKERS = NumberRange(1, 100_000, "workers", integer=True)
+#: One run's wall-time limit [s].
+SWEEP_RUN_TIMEOUT_S = NumberRange(0.001, 86_400, "seconds")
+#: The first run's seed.
+SWEEP_BASE_SEED = NumberRange(0, 2**62, "seed", integer=True)
+#: Runs per Ray task.
+SWEEP_BATCH = NumberRange(1, 10_000, "runs per task", integer=True)

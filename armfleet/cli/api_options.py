@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from armfleet.checks.network_address import DEFAULT_BIND, check_bind_host
 from armfleet.cli.number_arguments import port_or_free, request_timeout
 from armfleet.cli.parser import OneLineParser
 from armfleet.remote import Client, RunState, WorldServer, connect
-from armfleet.remote.address import DEFAULT_BIND, check_bind_host
 from armfleet.remote.client import DEFAULT_TIMEOUT_S
 from armfleet.world import World
 

@@ -9,17 +9,18 @@ import sys
 import time
 from types import FrameType
 
+from armfleet import topics
 from armfleet.cli.api_options import check_api_arguments, start_api
 from armfleet.cli.foxglove_options import start_foxglove
 from armfleet.cli.listen_ports import check_run_ports
 from armfleet.cli.record_option import RunRecording
 from armfleet.cli.status_line import status_line
 from armfleet.cli.world_loop import run_world
-from armfleet.launch import launch
 from armfleet.messages import BringupEvent
 from armfleet.remote import RunState
 from armfleet.spec import FleetSpec
 from armfleet.world import World
+from armfleet.world.launch import launch
 
 
 def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
@@ -54,7 +55,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
         def on_bringup(event: BringupEvent) -> None:
             say(f"[{event.arm}] {event.stage.value} (t={event.stamp:.3f}s, {event.wall_time:.2f}s)")
 
-        world.bus.subscribe("/bringup", on_bringup)
+        world.bus.subscribe(topics.BRINGUP, on_bringup)
 
     finished = ""  # the closing line of a run that reached its --duration
     try:

@@ -7,10 +7,10 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
+from armfleet.checks.network_address import DEFAULT_BIND
 from armfleet.checks.number_ranges import DEFAULT_FOXGLOVE_RATE_HZ, FOXGLOVE_RATE_HZ
 from armfleet.cli.number_arguments import number_in, port_or_free
 from armfleet.cli.parser import UsageError
-from armfleet.remote.address import DEFAULT_BIND
 
 if TYPE_CHECKING:
     from armfleet.foxglove import FoxgloveServer
@@ -64,7 +64,10 @@ def start_foxglove(world: World, args: argparse.Namespace) -> FoxgloveServer | N
         return None
     rate = getattr(args, "foxglove_rate", None)
     rate = DEFAULT_FOXGLOVE_RATE_HZ if rate is None else rate
-    server = world.serve_foxglove(port, host=args.foxglove_bind, rate_hz=rate)
+    from armfleet.foxglove import serve_foxglove  # the foxglove extra, loaded when asked for
+
+    # As world.serve_foxglove: from the thread that steps the world, which this is.
+    server = serve_foxglove(world, port, host=args.foxglove_bind, rate_hz=rate)
     if not getattr(args, "quiet", False):
         print(f"foxglove: {server.url}", flush=True)
     if server.exposed:

@@ -8,10 +8,11 @@ import queue
 import sys
 import time
 
+from armfleet import topics
+from armfleet.checks.network_address import DEFAULT_BIND
 from armfleet.cli.parser import UsageError
 from armfleet.messages import BringupEvent, BringupStage
 from armfleet.remote import Client, NoWorldFound, connect, runtime_file
-from armfleet.remote.address import DEFAULT_BIND
 from armfleet.remote.runtime_file import WorldEntry
 from armfleet.spec import FleetSpec
 
@@ -112,7 +113,7 @@ def add_to_world(client: Client, spec: FleetSpec, quiet: bool) -> int:
     """Spawn the spec's arms in the running world, one after the other, showing their stages."""
     names = {arm.name for arm in spec.arms}
     events: queue.Queue[BringupEvent] = queue.Queue()
-    subscription = client.subscribe("/bringup", events.put, queue_size=1000)
+    subscription = client.subscribe(topics.BRINGUP, events.put, queue_size=1000)
     try:
         for arm in spec.arms:
             client.spawn(arm.name, arm.model, arm.pose)

@@ -7,7 +7,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from armfleet import __version__
+from armfleet._version import __version__
 from armfleet.cli import (
     arms_command,
     grip_command,

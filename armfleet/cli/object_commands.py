@@ -8,8 +8,8 @@ from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.parser import OneLineParser
 from armfleet.objects.object_spec import DEFAULT_MASS_KG, MAX_MASS_KG, MAX_SIZE_M, SIZE_MEANING
-from armfleet.remote.object_services import REMOTE_SHAPES
 from armfleet.remote.world_info import ObjectInfo
+from armfleet.services.object_services import REMOTE_SHAPES
 
 
 def add_parsers(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:

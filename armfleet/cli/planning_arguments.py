@@ -16,7 +16,7 @@ from typing import Any
 from armfleet.checks.number_ranges import CLEARANCE_M, PLANNING_TIMEOUT_S
 from armfleet.cli.number_arguments import number_in
 from armfleet.cli.parser import UsageError
-from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 
 #: Options that only mean something with ``--avoid-collisions``, by ``dest``.
 _PLANNING_ONLY = {"clearance": "--clearance", "planning_timeout": "--planning-timeout"}

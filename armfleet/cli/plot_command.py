@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import re
 
+from armfleet.checks.names import ARM_NAME_PATTERN
 from armfleet.cli.misplaced_values import ValueTest
 from armfleet.cli.parser import OneLineParser
 from armfleet.cli.path_arguments import path_text
-from armfleet.names import ARM_NAME_PATTERN
 from armfleet.recording import open_recording, plot_recording
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import re
 
+from armfleet.checks.names import ARM_NAME_PATTERN, check_arm_name
 from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_connect_arguments
 from armfleet.cli.fleet_runner import run_fleet
@@ -15,8 +16,7 @@ from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.description import ModelLibrary
 from armfleet.errors import UnknownModel
-from armfleet.names import ARM_NAME_PATTERN, check_arm_name
-from armfleet.spawn_pose import AT_SYNTAX, SpawnPose
+from armfleet.frames.spawn_pose import AT_SYNTAX, SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
 from armfleet.spec.scene_rehearsal import rehearse
 

@@ -8,22 +8,21 @@ import sys
 import time
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
+from armfleet.checks.number_ranges import (
+    SWEEP_BASE_SEED,
+    SWEEP_BATCH,
+    SWEEP_RUN_TIMEOUT_S,
+    SWEEP_RUNS,
+    SWEEP_WORKERS,
+)
 from armfleet.cli.number_arguments import integer_in, number_in
 from armfleet.cli.parser import OneLineParser
 from armfleet.cli.path_arguments import path_text
-from armfleet.sweeps.definition import load_sweep
-from armfleet.sweeps.errors import SweepError
-from armfleet.sweeps.sweep import (
-    BASE_SEED,
-    BATCH,
-    RUN_TIMEOUT_S,
-    RUNS,
-    WORKERS,
-    SweepInterrupted,
-    SweepResult,
-    sweep,
-)
+
+if TYPE_CHECKING:
+    from armfleet.sweeps.sweep import SweepResult
 
 
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -38,7 +37,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )
     parser.add_argument("scenario", type=path_text, metavar="SCENARIO", help="the scenario")
     parser.add_argument(
-        "--runs", type=integer_in(RUNS), default=None, metavar="N",
+        "--runs", type=integer_in(SWEEP_RUNS), default=None, metavar="N",
         help="runs (default: the sweep's runs:)",
     )  # fmt: skip
     parser.add_argument(
@@ -46,7 +45,7 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
         help="join this Ray cluster instead of starting a private local instance",
     )  # fmt: skip
     parser.add_argument(
-        "--workers", type=integer_in(WORKERS), default=None, metavar="K",
+        "--workers", type=integer_in(SWEEP_WORKERS), default=None, metavar="K",
         help="runs at once (default: every core, or the cluster's CPUs)",
     )  # fmt: skip
     parser.add_argument(
@@ -58,15 +57,15 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )
     parser.add_argument("--overwrite", action="store_true", help="replace the results file")
     parser.add_argument(
-        "--run-timeout", type=number_in(RUN_TIMEOUT_S), default=None, metavar="S",
+        "--run-timeout", type=number_in(SWEEP_RUN_TIMEOUT_S), default=None, metavar="S",
         help="a run past S seconds fails (default: the sweep's run_timeout_s, else 600)",
     )  # fmt: skip
     parser.add_argument(
-        "--base-seed", type=integer_in(BASE_SEED), default=None, metavar="SEED",
+        "--base-seed", type=integer_in(SWEEP_BASE_SEED), default=None, metavar="SEED",
         help="run i has seed SEED + i (default: the sweep's base_seed, else 0)",
     )  # fmt: skip
     parser.add_argument(
-        "--batch-size", type=integer_in(BATCH), default=None, metavar="B",
+        "--batch-size", type=integer_in(SWEEP_BATCH), default=None, metavar="B",
         help="runs per Ray task (default: sized to about 2 s of work)",
     )  # fmt: skip
     parser.add_argument(
@@ -79,6 +78,11 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # Ray and pyarrow load only for this command (and say which extra they need).
+    from armfleet.sweeps.definition import load_sweep
+    from armfleet.sweeps.errors import SweepError
+    from armfleet.sweeps.sweep import SweepInterrupted, sweep
+
     if args.plot_against is not None:  # refused before anything starts, not after the runs
         columns = load_sweep(args.scenario).parameter_columns
         if args.plot_against not in columns:

@@ -8,9 +8,6 @@ from pathlib import Path
 
 from armfleet.cli.parser import OneLineParser
 from armfleet.cli.path_arguments import path_text
-from armfleet.sweeps.report_plot import plot_sweep
-from armfleet.sweeps.results_file import read_results
-from armfleet.sweeps.summary import summarize
 
 
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -37,6 +34,11 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # pyarrow and matplotlib load only for this command (the sweeps extra).
+    from armfleet.sweeps.report_plot import plot_sweep
+    from armfleet.sweeps.results_file import read_results
+    from armfleet.sweeps.summary import summarize
+
     results = Path(args.results)
     table = read_results(results)
     out = Path(args.plot) if args.plot is not None else results.with_suffix(".png")

@@ -21,8 +21,8 @@ from armfleet.cli.api_options import add_connect_arguments, connect_from
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.remote import ConnectionLost
 from armfleet.remote.client import DEFAULT_TIMEOUT_S
-from armfleet.remote.codec import to_wire
-from armfleet.remote.errors import RequestTimeout
+from armfleet.services.codec import to_wire
+from armfleet.services.errors import RequestTimeout
 
 #: Messages ``echo`` holds for the terminal before dropping the oldest.
 ECHO_QUEUE = 100

@@ -21,8 +21,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from armfleet.joint_memory import JointMemory, Row
 from armfleet.kinematics import ArmKinematics
+from armfleet.physics.joint_memory import JointMemory, Row
 
 try:  # built by `pip install`; a source tree that was never built has none
     from armfleet.controllers._fleet_kernel import FleetKernel

@@ -9,11 +9,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
-from armfleet.arm_body import ArmBody
-from armfleet.bus import Bus
 from armfleet.controllers.parameters import ParameterSpec, load_parameters
 from armfleet.errors import ArmfleetError
 from armfleet.kinematics import ArmKinematics
+from armfleet.physics.arm_body import ArmBody
+from armfleet.runtime.bus import Bus
 
 
 class LifecycleState(enum.Enum):

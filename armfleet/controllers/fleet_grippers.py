@@ -17,7 +17,7 @@ import numpy.typing as npt
 
 from armfleet.controllers.finger_law import finger_efforts
 from armfleet.controllers.gripper_controller import GripperController
-from armfleet.joint_memory import JointMemory, Row
+from armfleet.physics.joint_memory import JointMemory, Row
 
 
 class FleetGrippers:

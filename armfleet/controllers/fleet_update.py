@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -44,12 +44,28 @@ from armfleet.controllers.position_controller import (
     clip_torques,
     feedback_acceleration,
 )
-from armfleet.joint_memory import JointMemory, Row
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray
+from armfleet.physics.arm_body import ArmBody
+from armfleet.physics.joint_memory import JointMemory, Row
 
-if TYPE_CHECKING:
-    from armfleet.arm import Arm
+
+class ControlledArm(Protocol):
+    """An arm as the fleet update lays it out and updates it."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def body(self) -> ArmBody: ...
+    @property
+    def kinematics(self) -> ArmKinematics: ...
+    @property
+    def controller_manager(self) -> ControllerManager: ...
+    @property
+    def position_controller(self) -> PositionController: ...
+    @property
+    def gripper_controller(self) -> GripperController | None: ...
+
 
 #: Running controller types (in load order) that the fleet path updates.
 FLEET_CONTROLLER_SETS = (
@@ -117,12 +133,12 @@ class FleetUpdate:
         self._compiled = compiled and kernel_built()
         self._kernel: CompiledControl | None = None
         self._kernel_index: dict[str, int | None] = {}
-        self._arms: list[Arm] = []
+        self._arms: list[ControlledArm] = []
         #: The arms' controller managers, read once per lay-out (not per step).
         self._managers: tuple[ControllerManager, ...] = ()
         self._plan: _Plan | None = None
 
-    def lay_out(self, arms: Iterable[Arm]) -> None:
+    def lay_out(self, arms: Iterable[ControlledArm]) -> None:
         """Give ``arms`` (every arm of the world, in order) their columns of the memory."""
         self._arms = list(arms)
         memory = self._memory
@@ -314,7 +330,9 @@ class FleetUpdate:
         memory.saturation_steps += memory.saturated
 
 
-def _fleet_arm(arm: Arm, memory: JointMemory, kernel_index: int | None) -> _FleetArm | None:
+def _fleet_arm(
+    arm: ControlledArm, memory: JointMemory, kernel_index: int | None
+) -> _FleetArm | None:
     """``arm`` as a fleet-path arm, or None if its own manager must update it."""
     manager, controller = arm.controller_manager, arm.position_controller
     running = manager.running

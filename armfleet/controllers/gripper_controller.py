@@ -32,9 +32,9 @@ from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
 from armfleet.controllers.parameters import ParameterSpec
 from armfleet.controllers.position_controller import PositionController, as_slice
 from armfleet.errors import ArmfleetError, GripperCommandError
-from armfleet.joint_memory import JointViews, Row
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray, GripperCommand, GripperMode, GripperState
+from armfleet.physics.joint_memory import JointViews, Row
 
 logger = logging.getLogger("armfleet")
 

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from armfleet.checks.located_yaml import LocatedDict, YamlDocumentError, read_located
 from armfleet.checks.user_paths import file_problem
+from armfleet.description.data_folders import data_dir
 from armfleet.errors import ParameterError
-from armfleet.located_yaml import LocatedDict, YamlDocumentError, read_located
-from armfleet.paths import data_dir
 
 
 @dataclass(frozen=True)

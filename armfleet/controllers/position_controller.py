@@ -48,7 +48,6 @@ from armfleet.errors import (
     TargetLengthError,
     TargetTypeError,
 )
-from armfleet.joint_memory import JointViews, Row
 from armfleet.messages import (
     ControllerState,
     FloatArray,
@@ -56,6 +55,7 @@ from armfleet.messages import (
     PlannedMotion,
     Positions,
 )
+from armfleet.physics.joint_memory import JointViews, Row
 
 logger = logging.getLogger("armfleet")
 

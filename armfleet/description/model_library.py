@@ -16,13 +16,13 @@ from xml.dom import minidom
 
 import xacro
 
+from armfleet.description.data_folders import data_dir
 from armfleet.description.resource_resolver import ResourceResolver
 from armfleet.description.upstream_macro import XACRO_NS, prefixable_macro
 from armfleet.errors import DescriptionError, UnknownModel
-from armfleet.paths import data_dir
-from armfleet.simulated_body.contact_pairs import solid_link_pairs, touching_pairs
-from armfleet.simulated_body.lean_urdf import lean_urdf
-from armfleet.spawn_pose import SpawnPose
+from armfleet.frames.spawn_pose import SpawnPose
+from armfleet.physics.contact_pairs import solid_link_pairs, touching_pairs
+from armfleet.physics.lean_urdf import lean_urdf
 
 XACRO_SUFFIX = ".urdf.xacro"
 UPSTREAM_PROPERTY = "armfleet_upstream_urdf"
@@ -40,7 +40,7 @@ class ArmDescription:
         home: home positions of the arm joints in chain order [rad or m].
         ignored_contacts: link pairs whose contacts don't count: pairs of links with
             a collision shape never seen touching in random configurations
-            (:mod:`armfleet.simulated_body.contact_pairs`).
+            (:mod:`armfleet.physics.contact_pairs`).
     """
 
     model: str
@@ -183,7 +183,7 @@ class _Template:
 
 def _never_touching(probe_urdf: str) -> tuple[tuple[str, str], ...]:
     """Unprefixed pairs of links with a collision shape that no sampled configuration of
-    the probe arm brings into contact (see :mod:`armfleet.simulated_body.contact_pairs`)."""
+    the probe arm brings into contact (see :mod:`armfleet.physics.contact_pairs`)."""
     touching = touching_pairs(lean_urdf(probe_urdf))
     never = sorted(solid_link_pairs(probe_urdf) - touching)
     return tuple((a.removeprefix(PROBE_PREFIX), b.removeprefix(PROBE_PREFIX)) for a, b in never)

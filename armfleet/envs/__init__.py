@@ -9,6 +9,11 @@ Importing this package registers ``armfleet/Reach-v0``, ``armfleet/Handover-v0``
 Gymnasium).
 """
 
+from armfleet.checks.extras import require_extra
+
+require_extra("The learning environments", "envs", "gymnasium", "pettingzoo")
+
+
 from armfleet.envs.actions import ActionKind, StepLimits
 from armfleet.envs.arm_commander import ArmCommander
 from armfleet.envs.errors import EnvError, EnvNotReset, InvalidAction, InvalidOption

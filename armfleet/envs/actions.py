@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from armfleet.arm import Arm
+from armfleet.arms.arm import Arm
 from armfleet.checks.real_numbers import all_real
 from armfleet.envs.choices import choose
 from armfleet.envs.errors import InvalidAction, InvalidOption

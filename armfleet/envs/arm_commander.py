@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armfleet.arm import Arm
+from armfleet.arms.arm import Arm
 from armfleet.envs.actions import GRIPPER, GRIPPER_CLOSE_ABOVE, ActionKind
 from armfleet.envs.poses import moved
 from armfleet.errors import (

@@ -29,10 +29,10 @@ from armfleet.envs.observations import ArmObserver
 from armfleet.envs.rendering import DEFAULT_SIZE, RenderMode, check_size, render_rgb
 from armfleet.envs.stop_policy import StopPolicy
 from armfleet.envs.tasks.task import Evaluation, SceneTask, Task
-from armfleet.launch import launch
 from armfleet.messages import ArmMode
 from armfleet.spec import FleetSpec
 from armfleet.world import World
+from armfleet.world.launch import launch
 
 logger = logging.getLogger("armfleet")
 

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 import numpy as np
 from gymnasium import spaces
 
-from armfleet.arm import Arm
+from armfleet.arms.arm import Arm
 from armfleet.envs.poses import POSE_SIZE, pose_vector
 from armfleet.messages import FloatArray
 from armfleet.world import World

@@ -11,8 +11,8 @@ from armfleet.envs.multi_arm_env import MultiArmEnv
 from armfleet.envs.tasks.handover_task import HandoverTask, RewardKind
 from armfleet.envs.tasks.reach_task import ReachTask
 from armfleet.envs.tasks.task import SceneTask
+from armfleet.scenarios.handover import TOLERANCE_M
 from armfleet.spec import FleetSpec
-from armfleet.sweeps.scenarios.handover import TOLERANCE_M
 
 
 class ReachEnv(MultiArmEnv):

@@ -9,6 +9,10 @@ panel. See docs/foxglove.md.
 
 from __future__ import annotations
 
+from armfleet.checks.extras import require_extra
+
+require_extra("Foxglove live", "foxglove", "foxglove")
+
 from armfleet.foxglove.assets import AssetLibrary, urdf_uri
 from armfleet.foxglove.errors import FoxgloveError, ServiceCallError
 from armfleet.foxglove.server import DEFAULT_PORT, FoxgloveServer, serve_foxglove

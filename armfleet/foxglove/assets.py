@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
+    from armfleet.arms.arm import Arm
 
 logger = logging.getLogger("armfleet")
 

@@ -9,7 +9,7 @@ encoders the MCAP recording uses), plus ``/<arm>/robot_description`` per arm
 subscribes: the Foxglove server's listener then asks the stepping thread (through
 ``world.submit``) to subscribe to the bus topic, and to drop that subscription when the
 last client leaves. So ``/tf`` and ``/<arm>/position_controller/state``, computed only
-for listeners (:meth:`armfleet.bus.Bus.has_subscribers`), stay off until watched.
+for listeners (:meth:`armfleet.runtime.bus.Bus.has_subscribers`), stay off until watched.
 
 The streams published every step (``/tf``, each arm's joint states and controller
 and gripper states: :data:`STREAMED_TYPES`) go out at a display rate, one instant of
@@ -41,18 +41,17 @@ from typing import TYPE_CHECKING, Any
 
 import foxglove
 
-from armfleet.bringup import BRINGUP_TOPIC
+from armfleet import topics
 from armfleet.errors import WorldClosed
 from armfleet.foxglove.assets import AssetLibrary
-from armfleet.foxglove.scene_objects import SCENE_OBJECTS_TOPIC, SceneObjects
+from armfleet.foxglove.scene_objects import SceneObjects
 from armfleet.messages import ControllerState, GripperState, JointState
 from armfleet.recording.encode import MessageEncoder, StringEncoder, encoder_for, stamp_ns
 from armfleet.recording.schemas import MessageSchema
-from armfleet.robot_state_publisher import TF_TOPIC
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
-    from armfleet.bus import Subscription
+    from armfleet.arms.arm import Arm
+    from armfleet.runtime.bus import Subscription
     from armfleet.world import World
 
 logger = logging.getLogger("armfleet")
@@ -133,8 +132,8 @@ class TopicChannels:
     @property
     def topics(self) -> list[str]:
         """The topics with a channel now, sorted."""
-        descriptions = (f"/{name}/robot_description" for name in self._descriptions)
-        return sorted([*self._topics, *descriptions, SCENE_OBJECTS_TOPIC])
+        descriptions = (topics.robot_description(name) for name in self._descriptions)
+        return sorted([*self._topics, *descriptions, topics.SCENE_OBJECTS])
 
     @property
     def listened(self) -> list[str]:
@@ -148,7 +147,7 @@ class TopicChannels:
 
     def start(self) -> None:
         """Open the channels of what the world has now, and watch for arms to come."""
-        self._watch = self._world.bus.subscribe(BRINGUP_TOPIC, self._on_bringup)
+        self._watch = self._world.bus.subscribe(topics.BRINGUP, self._on_bringup)
         self.refresh()
 
     def close(self) -> None:
@@ -189,18 +188,18 @@ class TopicChannels:
     def _open_topic(self, topic: str, message_type: type) -> None:
         encode = encoder_for(message_type)
         channel = self._channel(topic, encode.schema, message_type.__name__)
-        streamed = topic == TF_TOPIC or issubclass(message_type, STREAMED_TYPES)
+        streamed = topic == topics.TF or issubclass(message_type, STREAMED_TYPES)
         entry = _TopicChannel(topic, channel, encode, streamed)
         self._topics[topic] = entry
         self._by_id[channel.id()] = entry
 
     def _open_description(self, arm: Arm) -> None:
-        topic = f"/{arm.name}/robot_description"
+        topic = topics.robot_description(arm.name)
         encode = StringEncoder()
         channel = self._channel(topic, encode.schema, "str")
         entry = _DescriptionChannel(arm, channel, encode(self._assets.add_arm(arm)))
         entry.watch = self._world.bus.subscribe(
-            f"/{arm.name}/status", self._on_status, on_gone=self._on_gone
+            topics.status(arm.name), self._on_status, on_gone=self._on_gone
         )
         self._descriptions[arm.name] = entry
         self._by_id[channel.id()] = entry

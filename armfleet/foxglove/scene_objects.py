@@ -33,6 +33,7 @@ from foxglove.messages import (
     Vector3,
 )
 
+from armfleet import topics
 from armfleet.objects.object_spec import Shape
 from armfleet.recording.encode import stamp_ns
 
@@ -43,7 +44,6 @@ if TYPE_CHECKING:
 logger = logging.getLogger("armfleet")
 
 #: The channel's topic.
-SCENE_OBJECTS_TOPIC = "/scene_objects"
 #: Media types of the mesh files objects are made from, by suffix.
 MESH_MEDIA_TYPES = {".stl": "model/stl", ".obj": "model/obj"}
 
@@ -58,7 +58,7 @@ class SceneObjects:
 
     def __init__(self, world: World, context: foxglove.Context) -> None:
         self._world = world
-        self._channel = SceneUpdateChannel(SCENE_OBJECTS_TOPIC, context=context)
+        self._channel = SceneUpdateChannel(topics.SCENE_OBJECTS, context=context)
         #: Object name -> the object drawn (a new object of the same name is redrawn).
         self._drawn: dict[str, WorldObject] = {}
         #: Updates handed to the server so far.

@@ -26,13 +26,14 @@ from typing import TYPE_CHECKING
 import foxglove
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener, WebSocketServer
 
+from armfleet.checks.network_address import DEFAULT_BIND, check_bind_host, is_loopback
 from armfleet.checks.number_ranges import DEFAULT_FOXGLOVE_RATE_HZ, FOXGLOVE_RATE_HZ, PORT_OR_FREE
 from armfleet.errors import ArmfleetError
 from armfleet.foxglove.assets import AssetLibrary
 from armfleet.foxglove.channels import JSON, TopicChannels
 from armfleet.foxglove.errors import FoxgloveError
 from armfleet.foxglove.services import ArmServices
-from armfleet.remote.address import DEFAULT_BIND, check_bind_host, is_loopback
+from armfleet.world.world_listener import WorldListener
 
 if TYPE_CHECKING:
     from armfleet.world import World
@@ -76,6 +77,16 @@ class _Listener(ServerListener):
 
     def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
         self._channels.on_unsubscribe(channel.id)
+
+
+class _WorldLink(WorldListener):
+    """Closes the server with its world (first, while the bus still has its subscriptions)."""
+
+    def __init__(self, server: FoxgloveServer) -> None:
+        self._server = server
+
+    def on_close(self) -> None:
+        self._server.close()
 
 
 class FoxgloveServer:
@@ -146,10 +157,12 @@ class FoxgloveServer:
                 "for a free one"
             ) from None
         self._closed = False
+        self._link = _WorldLink(self)
         try:
             self._services = ArmServices(world, self.url)
             self._server.add_services(self._services.sdk_services())
             self._channels.start()
+            world.attach(self._link)
         except BaseException:
             self.close()
             raise
@@ -210,6 +223,7 @@ class FoxgloveServer:
             if self._closed:
                 return
             self._closed = True
+        self._world.detach(self._link)
         try:
             self._channels.close()
         finally:

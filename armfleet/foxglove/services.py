@@ -1,9 +1,9 @@
 """The Foxglove services that command the arms: ``/move``, ``/move_together``, ``/grip``,
 ``/reset``.
 
-Each is the live API's service of the same name (:mod:`armfleet.remote.services`):
+Each is the live API's service of the same name (:mod:`armfleet.services.world_services`):
 the request, a JSON object, goes through the same checks
-(:class:`~armfleet.remote.arguments.Arguments` with the live API's fields, then
+(:class:`~armfleet.services.arguments.Arguments` with the live API's fields, then
 ``prepare_*`` in the Foxglove server's thread), and the work it returns runs in the
 stepping thread through ``world.submit``; the handler waits for its result at most
 :data:`CALL_TIMEOUT_S`. A refused request raises, and the Foxglove server sends the
@@ -31,10 +31,10 @@ from armfleet.errors import ArmfleetError
 from armfleet.foxglove.channels import JSON, sdk_schema
 from armfleet.foxglove.errors import ServiceCallError
 from armfleet.recording.schemas import MessageSchema, Schema, number, numbers, obj, strings
-from armfleet.remote.arguments import Arguments
-from armfleet.remote.planning_options import PLANNING_REPLY_MARGIN_S
-from armfleet.remote.protocol import Service
-from armfleet.remote.services import FIELDS, WorldServices
+from armfleet.services.arguments import Arguments
+from armfleet.services.planning_options import PLANNING_REPLY_MARGIN_S
+from armfleet.services.protocol import Service
+from armfleet.services.world_services import FIELDS, WorldServices
 
 if TYPE_CHECKING:
     from armfleet.world import World

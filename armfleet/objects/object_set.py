@@ -8,14 +8,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from armfleet.bus import Bus
-from armfleet.contact_monitor import ContactMonitor
 from armfleet.errors import UnknownObject
-from armfleet.lifetime import Lifetime
-from armfleet.object_clearance import check_object_clearance, place_clear_object
+from armfleet.objects.object_clearance import check_object_clearance, place_clear_object
 from armfleet.objects.object_frames import ObjectFramePublisher
 from armfleet.objects.object_spec import ObjectSpec
 from armfleet.objects.world_object import WorldObject
+from armfleet.physics.contact_monitor import ContactMonitor
+from armfleet.runtime.bus import Bus
+from armfleet.runtime.lifetime import Lifetime
 
 
 class ObjectSet:
@@ -71,7 +71,7 @@ class ObjectSet:
 
         Raises:
             ObjectCollision: it would touch an arm or overlap the floor or an object
-                (:mod:`armfleet.object_clearance`); nothing was added.
+                (:mod:`armfleet.objects.object_clearance`); nothing was added.
         """
         name = spec.name
         lifetime = Lifetime(lambda: UnknownObject(name, list(self._objects)), self._lifetime)

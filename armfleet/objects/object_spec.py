@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
+from armfleet.checks.names import RESERVED_NAMES, name_problem
 from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.checks.real_numbers import is_real, is_real_vector
 from armfleet.errors import ObjectError
 from armfleet.messages import FloatArray
-from armfleet.names import RESERVED_NAMES, name_problem
 from armfleet.objects.mesh_file import MESH_SUFFIXES, mesh_extents
 
 #: Lateral (Coulomb) friction coefficient of an object unless given.

@@ -17,10 +17,10 @@ import pybullet as p
 
 from armfleet.checks.real_numbers import is_real_vector
 from armfleet.errors import ObjectError, UnknownObject
-from armfleet.lifetime import Lifetime, while_alive
-from armfleet.link_damping import disable_link_damping
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import ObjectSpec, Shape, pose_matrix
+from armfleet.physics.link_damping import disable_link_damping
+from armfleet.runtime.lifetime import Lifetime, while_alive
 
 
 class WorldObject:
@@ -34,7 +34,7 @@ class WorldObject:
         on_remove: called with the object's name by :meth:`remove`: the world's own
             removal (body, frame, contacts, viewer). Without it, :meth:`remove` takes
             the body out of the physics engine only.
-        lifetime: its own, a child of its world's (see :mod:`armfleet.lifetime`),
+        lifetime: its own, a child of its world's (see :mod:`armfleet.runtime.lifetime`),
             ended by :meth:`remove`: once the world is closed, reading or moving the
             object raises :class:`~armfleet.errors.WorldClosed`, once it is removed
             :class:`~armfleet.errors.UnknownObject` (listing the objects there are).
@@ -188,7 +188,7 @@ class WorldObject:
         Raises:
             ObjectError: not a finite pose.
             ObjectCollision: in a world, it would touch an arm or overlap something
-                there (the rule of :mod:`armfleet.object_clearance`, as for a new
+                there (the rule of :mod:`armfleet.objects.object_clearance`, as for a new
                 object); it stays where it was, moving as it was.
         """
         if not (is_real_vector(at) and is_real_vector(rpy_deg)) or not (

@@ -8,8 +8,9 @@
 - :mod:`~armfleet.planning.motion_planner`: the world's planner (plan, execute).
 """
 
+from armfleet.motion.pose_goal import PoseGoal
 from armfleet.planning.failure import FailureReason, PlanningFailed
-from armfleet.planning.motion_planner import MotionPlanner, PoseGoal
+from armfleet.planning.motion_planner import MotionPlanner
 from armfleet.planning.plan import Plan
 from armfleet.planning.problem import PlanningProblem
 from armfleet.planning.scene import PlanningScene

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,6 +28,8 @@ from armfleet.errors import (
     UnreachablePose,
 )
 from armfleet.messages import FloatArray, PlannedMotion
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
+from armfleet.motion.pose_goal import PoseGoal
 from armfleet.planning.failure import FailureReason, PlanningFailed
 from armfleet.planning.moving_arms import MovingArm, find_start_delay
 from armfleet.planning.object_geometry import object_placement, object_shape
@@ -36,11 +37,11 @@ from armfleet.planning.path_check import PathCertifier
 from armfleet.planning.path_search import find_path
 from armfleet.planning.path_timing import JointLimits, TimedPath
 from armfleet.planning.plan import Plan
-from armfleet.planning.problem import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S, PlanningProblem
+from armfleet.planning.planned_arm import PlannedArm
+from armfleet.planning.problem import PlanningProblem
 from armfleet.planning.scene import ArmGeometry, PlanningScene, SceneObject, arm_geometry
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
     from armfleet.objects import WorldObject
 
 #: Rounds of other IK solutions (one per pose-goal arm, in turn) tried for a goal whose
@@ -48,15 +49,6 @@ if TYPE_CHECKING:
 IK_ALTERNATIVES = 12
 #: Tool path points drawn per second of motion.
 TOOL_PATH_RATE_HZ = 50.0
-
-
-@dataclass(frozen=True)
-class PoseGoal:
-    """A pose goal: ``link`` of the arm at ``pose`` (4x4 or ``pinocchio.SE3``) in ``frame``."""
-
-    pose: Any
-    frame: str = "world"
-    link: str = "tool0"
 
 
 Goal = Any  # joint positions, or a PoseGoal
@@ -74,7 +66,7 @@ class MotionPlanner:
 
     def __init__(
         self,
-        arms: Callable[[], Mapping[str, Arm]],
+        arms: Callable[[], Mapping[str, PlannedArm]],
         objects: Callable[[], Mapping[str, WorldObject]],
         touching: Callable[[str], set[str]],
         now: Callable[[], float],
@@ -83,7 +75,7 @@ class MotionPlanner:
         self._objects = objects
         self._touching = touching
         self._now = now
-        self._geometries: dict[str, tuple[Arm, ArmGeometry]] = {}
+        self._geometries: dict[str, tuple[PlannedArm, ArmGeometry]] = {}
         self._scene: tuple[tuple[Any, ...], PlanningScene] | None = None
 
     # -- planning ------------------------------------------------------------------------
@@ -156,7 +148,7 @@ class MotionPlanner:
             seconds=seconds,
         )
 
-    def _ready_arm(self, world_arms: Mapping[str, Arm], name: Any) -> Arm:
+    def _ready_arm(self, world_arms: Mapping[str, PlannedArm], name: Any) -> PlannedArm:
         if not isinstance(name, str) or name not in world_arms:
             raise UnknownArm(name, list(world_arms))
         arm = world_arms[name]
@@ -171,18 +163,18 @@ class MotionPlanner:
         return arm
 
     @staticmethod
-    def _start(arm: Arm) -> FloatArray:
+    def _start(arm: PlannedArm) -> FloatArray:
         trajectory = arm.position_controller.trajectory
         assert trajectory is not None  # _ready_arm checked it
         return np.array(trajectory.position, dtype=float)
 
     def _goal_state(
-        self, arms: list[Arm], goals: Mapping[str, Goal], start: FloatArray, checker: Any
+        self, arms: list[PlannedArm], goals: Mapping[str, Goal], start: FloatArray, checker: Any
     ) -> FloatArray:
         """The goal state: joint goals as given, pose goals by IK, preferring a solution
         clear of collisions when the nearest one is not."""
         parts: list[FloatArray] = []
-        pose_goals: dict[int, tuple[Arm, PoseGoal]] = {}
+        pose_goals: dict[int, tuple[PlannedArm, PoseGoal]] = {}
         for index, arm in enumerate(arms):
             goal = goals[arm.name]
             if isinstance(goal, PoseGoal):
@@ -236,7 +228,7 @@ class MotionPlanner:
                 scene.set_object(name, _in_hand(arms[holder], obj, scene))
         return scene
 
-    def _geometry(self, arm: Arm) -> ArmGeometry:
+    def _geometry(self, arm: PlannedArm) -> ArmGeometry:
         cached = self._geometries.get(arm.name)
         if cached is not None and cached[0] is arm:
             return cached[1]
@@ -254,7 +246,7 @@ class MotionPlanner:
         return geometry
 
     def _held_objects(
-        self, arms: Mapping[str, Arm], objects: Mapping[str, WorldObject]
+        self, arms: Mapping[str, PlannedArm], objects: Mapping[str, WorldObject]
     ) -> dict[str, str]:
         """Object name -> the arm whose gripper holds it (squeezing, touching it)."""
         held: dict[str, str] = {}
@@ -267,7 +259,9 @@ class MotionPlanner:
                     held[touched] = name
         return held
 
-    def _moving_arms(self, arms: Mapping[str, Arm], planned: tuple[str, ...]) -> list[MovingArm]:
+    def _moving_arms(
+        self, arms: Mapping[str, PlannedArm], planned: tuple[str, ...]
+    ) -> list[MovingArm]:
         movers = []
         for name, arm in arms.items():
             controller = arm.position_controller
@@ -344,14 +338,14 @@ class MotionPlanner:
         return delay
 
 
-def _solve_pose(arm: Arm, goal: PoseGoal, seed: FloatArray | None) -> FloatArray:
+def _solve_pose(arm: PlannedArm, goal: PoseGoal, seed: FloatArray | None) -> FloatArray:
     try:
         return arm.solve_ik(goal.pose, goal.frame, link=goal.link, seed=seed)
     except UnreachablePose as exc:
         raise PlanningFailed(FailureReason.GOAL_UNREACHABLE, str(exc), arms=(arm.name,)) from exc
 
 
-def _limits(arms: list[Arm]) -> JointLimits:
+def _limits(arms: list[PlannedArm]) -> JointLimits:
     velocity, acceleration, jerk = [], [], []
     for arm in arms:
         controller = arm.position_controller
@@ -362,7 +356,7 @@ def _limits(arms: list[Arm]) -> JointLimits:
     return JointLimits(np.concatenate(velocity), np.concatenate(acceleration), np.concatenate(jerk))
 
 
-def _in_hand(arm: Arm, obj: WorldObject, scene: PlanningScene) -> pin.SE3:
+def _in_hand(arm: PlannedArm, obj: WorldObject, scene: PlanningScene) -> pin.SE3:
     """Where a held object is in the frame of the hand joint that holds it."""
     hand = scene.hand_joint(arm.name)
     kinematics = arm.kinematics
@@ -390,7 +384,9 @@ def _delayed(motion: SampledMotion, columns: slice, start: FloatArray, rows: int
     )
 
 
-def _announcement(arm: Arm, plan: Plan, motion: SampledMotion, stamp: float) -> PlannedMotion:
+def _announcement(
+    arm: PlannedArm, plan: Plan, motion: SampledMotion, stamp: float
+) -> PlannedMotion:
     columns = plan.columns(arm.name)
     period = arm.position_controller.period
     every = max(1, round(1.0 / (TOOL_PATH_RATE_HZ * period)))

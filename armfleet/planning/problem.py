@@ -7,12 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from armfleet.messages import FloatArray
+from armfleet.motion.move_options import DEFAULT_TIMEOUT_S
 from armfleet.planning.scene import CollisionChecker
-
-#: Default time budget of one request [s].
-DEFAULT_TIMEOUT_S = 1.0
-#: Default margin between different bodies [m].
-DEFAULT_CLEARANCE_M = 0.01
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ Which pairs count:
 
 - not two geometries of one rigid piece, nor of two pieces one joint apart (adjacent);
 - not pairs never seen touching in sampled configurations (the description's
-  ``ignored_contacts``: :mod:`armfleet.simulated_body.contact_pairs`);
+  ``ignored_contacts``: :mod:`armfleet.physics.contact_pairs`);
 - not a held object against its gripper (the hand and the fingers);
 - and, per request (:meth:`PlanningScene.checker`), only pairs in which something moves
   with the planned joints: two things that stand still cannot start to collide.

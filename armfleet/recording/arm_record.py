@@ -1,6 +1,6 @@
 """What a recording keeps about each arm: name, model, pose, joints, URDF, when it came and went.
 
-The recorder writes one ``armfleet.arm`` metadata record per spawned arm (and
+The recorder writes one ``armfleet.arms.arm`` metadata record per spawned arm (and
 ``armfleet.arm_removed`` when one leaves), with the arm's exact URDF as an
 attachment named ``<arm>.urdf`` logged at the spawn time. Metadata and
 attachments go to the file at once, outside the chunks, so they survive a
@@ -12,13 +12,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.recording.errors import RecordingError
-from armfleet.spawn_pose import SpawnPose
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
+    from armfleet.arms.arm import Arm
 
-ARM_METADATA = "armfleet.arm"
+ARM_METADATA = "armfleet.arms.arm"
 REMOVED_METADATA = "armfleet.arm_removed"
 RUN_METADATA = "armfleet.run"
 URDF_MEDIA_TYPE = "application/xml"
@@ -65,7 +65,7 @@ class ArmRecord:
 
 
 def arm_metadata(arm: Arm, log_time_ns: int) -> dict[str, str]:
-    """The ``armfleet.arm`` record of a live arm."""
+    """The ``armfleet.arms.arm`` record of a live arm."""
     pose = arm.pose
     return {
         "name": arm.name,
@@ -79,7 +79,7 @@ def arm_metadata(arm: Arm, log_time_ns: int) -> dict[str, str]:
 
 
 def arm_record(values: dict[str, str], urdf: str, removed_ns: int | None) -> ArmRecord:
-    """An :class:`ArmRecord` from its ``armfleet.arm`` metadata and URDF."""
+    """An :class:`ArmRecord` from its ``armfleet.arms.arm`` metadata and URDF."""
     try:
         return ArmRecord(
             name=values["name"],

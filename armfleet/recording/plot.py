@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from armfleet.checks.extras import require_extra
 from armfleet.checks.user_paths import given_path
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.reader import Recording
@@ -85,6 +86,7 @@ def write_figure(data: TrackingData, path: Path, source: str = "") -> None:
     Raises:
         RecordingError: the file cannot be written.
     """
+    require_extra("Plotting a recording", "plot", "matplotlib")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

@@ -10,7 +10,7 @@ What goes in the file:
       ``/<arm>/position_controller/state``), JSON-encoded with ROS-shaped
       schemas (:mod:`armfleet.recording.schemas`), log time = simulated time [ns];
     * ``/tf_static`` as latched at the start, then as arms come;
-    * per arm: its URDF (attachment ``<arm>.urdf``), an ``armfleet.arm`` metadata
+    * per arm: its URDF (attachment ``<arm>.urdf``), an ``armfleet.arms.arm`` metadata
       record (model, pose, joints, spawn time), and ``/<arm>/robot_description``
       (``std_msgs/msg/String``, mesh paths as ``file://`` URIs for Foxglove);
     * the launch spec, if given (attachment ``launch_spec.yaml``), and an
@@ -34,7 +34,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from armfleet.bringup import BRINGUP_TOPIC
+from armfleet import topics
+from armfleet._version import __version__
 from armfleet.checks.user_paths import given_path
 from armfleet.errors import WorldClosed
 from armfleet.messages import ArmStatus, BringupEvent, BringupStage
@@ -53,8 +54,8 @@ from armfleet.recording.mcap_sink import CHUNK_BYTES, McapSink
 from armfleet.recording.spec_snapshot import spec_text
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
-    from armfleet.bus import Subscription, Tap
+    from armfleet.arms.arm import Arm
+    from armfleet.runtime.bus import Subscription, Tap
     from armfleet.spec import FleetSpec
     from armfleet.world import World
 
@@ -169,8 +170,6 @@ class Recorder:
         world = self._world
         if world.closed:
             raise WorldClosed()
-        from armfleet import __version__
-
         sink = McapSink(self._path, f"armfleet {__version__}", self._chunk_bytes)
         self._sink = sink
         # A script that never stops its recorder still leaves a complete file.
@@ -210,8 +209,8 @@ class Recorder:
         assert self._patterns is not None
         for topic in dict.fromkeys(self._patterns):
             self._listening.append(bus.subscribe(topic, functools.partial(self._on_message, topic)))
-        if BRINGUP_TOPIC not in self._patterns:  # still notice the arms that come
-            self._listening.append(bus.subscribe(BRINGUP_TOPIC, self._watch))
+        if topics.BRINGUP not in self._patterns:  # still notice the arms that come
+            self._listening.append(bus.subscribe(topics.BRINGUP, self._watch))
 
     def stop(self) -> None:
         """Stop recording and complete the file (summary, index); idempotent."""
@@ -320,7 +319,7 @@ class Recorder:
         self._sink.attach(urdf_attachment(arm.name), URDF_MEDIA_TYPE, urdf.encode(), now)
         self._sink.add_metadata(ARM_METADATA, arm_metadata(arm, now))
         self._arms[arm.name] = arm
-        topic = f"/{arm.name}/robot_description"
+        topic = topics.robot_description(arm.name)
         channel = self._channels.get(topic, _UNSEEN)
         if channel is _UNSEEN:
             channel = self._open(topic, str, StringEncoder())

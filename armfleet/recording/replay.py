@@ -19,7 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, cast
 
-from armfleet.bus import Bus
+from armfleet import topics
 from armfleet.checks.user_paths import given_path
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError
@@ -36,9 +36,10 @@ from armfleet.recording.replay_stream import (
     TargetSent,
     replay_events,
 )
+from armfleet.runtime.bus import Bus
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
+    from armfleet.arms.arm import Arm
     from armfleet.viewer import Viewer
     from armfleet.world import World
 
@@ -86,7 +87,7 @@ class ReplayPlayer:
     ) -> None:
         if not recording.arms:
             raise RecordingError(f"{recording.path} holds no armfleet arm to replay")
-        states = [recording.topics.get(f"/{name}/joint_states") for name in recording.arm_names]
+        states = [recording.topics.get(topics.joint_states(name)) for name in recording.arm_names]
         if not any(info is not None and info.message_count for info in states):
             raise RecordingError(
                 f"{recording.path} has no /<arm>/joint_states messages to replay "
@@ -153,12 +154,12 @@ class ReplayPlayer:
             self._remove(event.name)
         elif isinstance(event, TargetSent):
             if event.arm in self.arms:
-                topic = f"/{event.arm}/position_controller/commands"
+                topic = topics.position_commands(event.arm)
                 self._bus.publish(topic, JointCommand(event.positions))
         elif isinstance(event, PlanStarted):
             if event.arm in self.arms:  # drawn by the viewer until it ends, as live
                 plan = dataclasses.replace(event.plan, stamp=replay_time)
-                self._bus.publish(f"/{event.arm}/planned_motion", plan)
+                self._bus.publish(topics.planned_motion(event.arm), plan)
         elif isinstance(event, MotionChanged):
             arm = self.arms.get(event.arm)
             if arm is not None:

@@ -1,4 +1,4 @@
-"""A recorded arm, standing in for a live :class:`~armfleet.arm.Arm` in the MeshCat viewer.
+"""A recorded arm, standing in for a live :class:`~armfleet.arms.arm.Arm` in the MeshCat viewer.
 
 The viewer reads an arm's name, description, kinematics, current joint
 positions, whether it moves, and its bus (for the target marker and the planned
@@ -20,13 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from armfleet.bus import Bus
 from armfleet.description import ArmDescription, ModelLibrary
 from armfleet.errors import ArmfleetError
 from armfleet.kinematics import ArmKinematics
 from armfleet.messages import FloatArray, Positions
 from armfleet.recording.arm_record import ArmRecord
 from armfleet.recording.errors import RecordingError
+from armfleet.runtime.bus import Bus
 
 logger = logging.getLogger("armfleet")
 

@@ -14,6 +14,7 @@ import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from armfleet import topics
 from armfleet.messages import PlannedMotion
 from armfleet.recording.arm_record import ArmRecord
 from armfleet.recording.encode import numbers_or_nan, planned_motion
@@ -89,7 +90,7 @@ def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterato
     """The recording's replay events in time order.
 
     Args:
-        recording: an armfleet recording (its arms come from its ``armfleet.arm`` records).
+        recording: an armfleet recording (its arms come from its ``armfleet.arms.arm`` records).
         rate_hz: at most this many joint states per second per arm; all if None.
     """
     arms = {arm.name for arm in recording.arms}
@@ -99,25 +100,25 @@ def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterato
         if arm.removed_ns is not None:
             lifecycle.append(ArmRemoved(arm.removed_ns, arm.name))
     lifecycle.sort(key=lambda event: (event.time_ns, isinstance(event, ArmAppeared)))
-    topics: dict[str, tuple[str, str]] = {}
+    per_topic: dict[str, tuple[str, str]] = {}
     for name in arms:
-        topics[f"/{name}/joint_states"] = (name, "state")
-        topics[f"/{name}/position_controller/commands"] = (name, "command")
-        topics[f"/{name}/status"] = (name, "status")
-        topics[f"/{name}/planned_motion"] = (name, "plan")
+        per_topic[topics.joint_states(name)] = (name, "state")
+        per_topic[topics.position_commands(name)] = (name, "command")
+        per_topic[topics.status(name)] = (name, "status")
+        per_topic[topics.planned_motion(name)] = (name, "plan")
     period_ns = None if rate_hz is None else round(NS_PER_S / rate_hz)
     next_due: dict[str, int] = {}
     held: dict[str, tuple[int, bytes]] = {}  # an arm's newest state not delivered yet
     pending = iter(lifecycle)
     upcoming = next(pending, None)
-    wanted = [topic for topic in topics if topic in recording.topics]
+    wanted = [topic for topic in per_topic if topic in recording.topics]
     for topic, time_ns, data in recording.raw_messages(wanted):
         while upcoming is not None and upcoming.time_ns <= time_ns:
             if isinstance(upcoming, ArmRemoved):
                 yield from _release(recording, held, upcoming.name)
             yield upcoming
             upcoming = next(pending, None)
-        name, kind = topics[topic]
+        name, kind = per_topic[topic]
         if kind == "state":
             if period_ns is not None and time_ns < next_due.get(name, time_ns):
                 held[name] = (time_ns, data)
@@ -147,7 +148,7 @@ def replay_events(recording: Recording, rate_hz: float | None = None) -> Iterato
 
 
 def _positions(recording: Recording, arm: str, time_ns: int, data: bytes) -> JointPositions:
-    message = recording.decode(f"/{arm}/joint_states", data)
+    message = recording.decode(topics.joint_states(arm), data)
     names = tuple(message["name"])
     positions = numbers_or_nan(message.get("position"), len(names))
     return JointPositions(time_ns, arm, names, positions)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from armfleet import topics
 from armfleet.recording.encode import numbers_or_nan
 from armfleet.recording.errors import RecordingError, UnknownRecordedArm
 from armfleet.recording.reader import Recording
@@ -28,11 +29,11 @@ FloatArray = npt.NDArray[np.float64]
 
 
 def state_topic(arm: str) -> str:
-    return f"/{arm}/position_controller/state"
+    return topics.position_controller_state(arm)
 
 
 def command_topic(arm: str) -> str:
-    return f"/{arm}/position_controller/commands"
+    return topics.position_commands(arm)
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,12 @@
 """
 
 from armfleet.remote.client import Client, connect
-from armfleet.remote.errors import (
+from armfleet.remote.remote_arm import RemoteArm
+from armfleet.remote.remote_gripper import RemoteGripper
+from armfleet.remote.remote_subscription import RemoteSubscription
+from armfleet.remote.server import WorldServer, serve
+from armfleet.remote.world_info import ObjectInfo, TopicInfo, WorldInfo
+from armfleet.services.errors import (
     ConnectionLost,
     NoWorldFound,
     ProtocolError,
@@ -19,12 +24,7 @@ from armfleet.remote.errors import (
     TopicGone,
     UnknownTopic,
 )
-from armfleet.remote.remote_arm import RemoteArm
-from armfleet.remote.remote_gripper import RemoteGripper
-from armfleet.remote.remote_subscription import RemoteSubscription
-from armfleet.remote.run_state import RunState
-from armfleet.remote.server import WorldServer, serve
-from armfleet.remote.world_info import ObjectInfo, TopicInfo, WorldInfo
+from armfleet.services.run_state import RunState
 
 __all__ = [
     "Client",

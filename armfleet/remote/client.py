@@ -10,26 +10,26 @@ import numpy as np
 import zmq
 
 from armfleet.checks import number_ranges
+from armfleet.checks.network_address import normalize_address
 from armfleet.errors import ArmfleetError
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import FloatArray, JointCommand, Positions
-from armfleet.planning.problem import DEFAULT_CLEARANCE_M
-from armfleet.planning.problem import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M
+from armfleet.motion.move_options import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
 from armfleet.remote import runtime_file
-from armfleet.remote.address import normalize_address
-from armfleet.remote.errors import NoWorldFound, RequestTimeout
-from armfleet.remote.planning_options import planning_request
-from armfleet.remote.protocol import (
-    DEFAULT_QUEUE_SIZE,
-    HARD_FRAME_LIMIT_BYTES,
-    PROTOCOL_VERSION,
-    armfleet_version,
-)
 from armfleet.remote.remote_arm import RemoteArm
 from armfleet.remote.remote_subscription import RemoteSubscription
 from armfleet.remote.request_channel import RequestChannel
 from armfleet.remote.stream_receiver import StreamReceiver
 from armfleet.remote.world_info import ObjectInfo, TopicInfo, WorldInfo
-from armfleet.spawn_pose import SpawnPose
+from armfleet.services.errors import NoWorldFound, RequestTimeout
+from armfleet.services.planning_options import planning_request
+from armfleet.services.protocol import (
+    DEFAULT_QUEUE_SIZE,
+    HARD_FRAME_LIMIT_BYTES,
+    PROTOCOL_VERSION,
+    armfleet_version,
+)
 
 #: Wait for most requests [s].
 DEFAULT_TIMEOUT_S = 5.0

@@ -19,9 +19,9 @@ from typing import Any
 import zmq
 
 from armfleet.errors import ArmfleetError
-from armfleet.remote.codec import pack, to_wire
-from armfleet.remote.errors import error_fields
-from armfleet.remote.protocol import MAX_HELD_REPLY_BYTES, FrameKind
+from armfleet.services.codec import pack, to_wire
+from armfleet.services.errors import error_fields
+from armfleet.services.protocol import MAX_HELD_REPLY_BYTES, FrameKind
 
 logger = logging.getLogger("armfleet")
 
@@ -72,7 +72,7 @@ class Outbox:
 
     def reply_error(self, peer: bytes, request_id: int | None, error: BaseException) -> None:
         """Reply with ``error``: an ArmfleetError's own message (and the fields a client
-        rebuilds it from, see :func:`~armfleet.remote.errors.error_fields`), else an
+        rebuilds it from, see :func:`~armfleet.services.errors.error_fields`), else an
         internal error."""
         details: dict[str, Any]
         if isinstance(error, ArmfleetError):

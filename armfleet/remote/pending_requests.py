@@ -1,7 +1,7 @@
 """Requests handed to the stepping thread and not yet answered.
 
 Limits are per client (per ZeroMQ peer): one client with
-:data:`~armfleet.remote.protocol.MAX_IN_FLIGHT_PER_CLIENT` requests unanswered (its
+:data:`~armfleet.services.protocol.MAX_IN_FLIGHT_PER_CLIENT` requests unanswered (its
 replies held unread included) is refused more, in a reply to each, while the
 others are served. The whole server's :data:`MAX_PENDING_REQUESTS` only protects
 the world's queue. The requests of a client that disconnected are cancelled.
@@ -20,11 +20,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from armfleet.errors import ArmfleetError
-from armfleet.remote.errors import ConnectionLost, RequestTimeout, TooManyRequests
 from armfleet.remote.outbox import Outbox
-from armfleet.remote.protocol import MAX_IN_FLIGHT_PER_CLIENT, MAX_PENDING_REQUESTS, Service
-from armfleet.remote.run_state import RunState
 from armfleet.remote.wakeup import Wakeup
+from armfleet.services.errors import ConnectionLost, RequestTimeout, TooManyRequests
+from armfleet.services.protocol import MAX_IN_FLIGHT_PER_CLIENT, MAX_PENDING_REQUESTS, Service
+from armfleet.services.run_state import RunState
 from armfleet.world import World
 
 

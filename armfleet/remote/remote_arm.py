@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -11,16 +11,14 @@ from armfleet.checks import number_ranges
 from armfleet.checks.flags import flag
 from armfleet.checks.real_numbers import all_real
 from armfleet.errors import ArmfleetError, NoGripper
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
-from armfleet.planning.problem import DEFAULT_CLEARANCE_M
-from armfleet.planning.problem import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
-from armfleet.remote.codec import decode_message
-from armfleet.remote.planning_options import planning_request
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M
+from armfleet.motion.move_options import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
 from armfleet.remote.remote_gripper import RemoteGripper
-from armfleet.spawn_pose import SpawnPose
-
-if TYPE_CHECKING:
-    from armfleet.remote.client import Client
+from armfleet.remote.service_caller import ServiceCaller
+from armfleet.services.codec import decode_message
+from armfleet.services.planning_options import planning_request
 
 #: Default wait for a motion to finish [s of wall time].
 WAIT_TIMEOUT_S = 30.0
@@ -35,7 +33,7 @@ class RemoteArm:
     property asks the world.
     """
 
-    def __init__(self, client: Client, description: dict[str, Any]) -> None:
+    def __init__(self, client: ServiceCaller, description: dict[str, Any]) -> None:
         self._client = client
         self._name = str(description["name"])
         self._model = str(description["model"])

@@ -1,16 +1,14 @@
-"""A client's handle on an arm's gripper, shaped like :class:`armfleet.gripper.Gripper`."""
+"""A client's handle on an arm's gripper, shaped like :class:`armfleet.arms.gripper.Gripper`."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from armfleet.checks import number_ranges
 from armfleet.checks.real_numbers import real_number
 from armfleet.messages import GripperMode, GripperState
-from armfleet.remote.codec import decode_message
-
-if TYPE_CHECKING:
-    from armfleet.remote.client import Client
+from armfleet.remote.service_caller import ServiceCaller
+from armfleet.services.codec import decode_message
 
 #: Default wait for the fingers to stop [s of wall time].
 GRIP_WAIT_TIMEOUT_S = 10.0
@@ -26,7 +24,7 @@ class RemoteGripper:
     :meth:`wait` blocks until the fingers stop. Every property asks the world.
     """
 
-    def __init__(self, client: Client, arm: str, description: dict[str, Any]) -> None:
+    def __init__(self, client: ServiceCaller, arm: str, description: dict[str, Any]) -> None:
         self._client = client
         self._arm = arm
         self._max_width = float(description["max_width"])

@@ -9,9 +9,9 @@ from typing import Any
 
 import zmq
 
-from armfleet.remote.codec import pack, unpack
-from armfleet.remote.errors import ConnectionLost, RemoteError, RequestTimeout, remote_error
-from armfleet.remote.protocol import FrameKind
+from armfleet.services.codec import pack, unpack
+from armfleet.services.errors import ConnectionLost, RemoteError, RequestTimeout, remote_error
+from armfleet.services.protocol import FrameKind
 
 #: Share of a request's timeout the world may keep it queued before refusing it,
 #: so that its refusal arrives before the client gives up.

@@ -26,27 +26,32 @@ from typing import Any
 import zmq
 
 from armfleet.checks.flags import flag
+from armfleet.checks.network_address import (
+    DEFAULT_BIND,
+    bind_endpoint,
+    check_bind_host,
+    is_loopback,
+)
 from armfleet.checks.number_ranges import REQUEST_TIMEOUT_S, WAIT_TIMEOUT_S
 from armfleet.errors import ArmfleetError
 from armfleet.remote import runtime_file
-from armfleet.remote.address import DEFAULT_BIND, bind_endpoint, check_bind_host, is_loopback
-from armfleet.remote.arguments import Arguments
-from armfleet.remote.codec import unpack_request
-from armfleet.remote.errors import ProtocolError
 from armfleet.remote.outbox import Outbox
 from armfleet.remote.peer_watch import PeerWatch
 from armfleet.remote.pending_requests import PendingRequests
-from armfleet.remote.protocol import (
+from armfleet.remote.streams import StreamHub
+from armfleet.remote.wakeup import Wakeup
+from armfleet.services.arguments import Arguments
+from armfleet.services.codec import unpack_request
+from armfleet.services.errors import ProtocolError
+from armfleet.services.protocol import (
     HARD_FRAME_LIMIT_BYTES,
     PROTOCOL_VERSION,
     TICK_PERIOD_S,
     Service,
     armfleet_version,
 )
-from armfleet.remote.run_state import RunState
-from armfleet.remote.services import FIELDS, WorldServices, require_known
-from armfleet.remote.streams import StreamHub
-from armfleet.remote.wakeup import Wakeup
+from armfleet.services.run_state import RunState
+from armfleet.services.world_services import FIELDS, WorldServices, require_known
 from armfleet.world import World
 
 logger = logging.getLogger("armfleet")

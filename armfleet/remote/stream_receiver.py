@@ -17,9 +17,9 @@ from typing import Any
 
 import zmq
 
-from armfleet.remote.codec import decode_message, pack, unpack
-from armfleet.remote.errors import ConnectionLost, NoWorldFound, TopicGone
-from armfleet.remote.protocol import STREAM_SILENCE_S, FrameKind
+from armfleet.services.codec import decode_message, pack, unpack
+from armfleet.services.errors import ConnectionLost, NoWorldFound, TopicGone
+from armfleet.services.protocol import STREAM_SILENCE_S, FrameKind
 
 logger = logging.getLogger("armfleet")
 

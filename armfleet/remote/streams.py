@@ -8,13 +8,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from armfleet.bus import Subscription
 from armfleet.errors import ArmfleetError
-from armfleet.remote.arguments import Arguments
-from armfleet.remote.codec import pack, to_wire
-from armfleet.remote.errors import ConnectionLost, ProtocolError
 from armfleet.remote.outbox import Delivery, Outbox
-from armfleet.remote.protocol import (
+from armfleet.runtime.bus import Subscription
+from armfleet.services.arguments import Arguments
+from armfleet.services.codec import pack, to_wire
+from armfleet.services.errors import ConnectionLost, ProtocolError
+from armfleet.services.protocol import (
     DEFAULT_QUEUE_SIZE,
     MAX_BATCH,
     MAX_QUEUE_SIZE,
@@ -22,7 +22,7 @@ from armfleet.remote.protocol import (
     MAX_SUBSCRIPTIONS_PER_STREAM,
     FrameKind,
 )
-from armfleet.remote.subscription_queue import SubscriptionQueue
+from armfleet.services.subscription_queue import SubscriptionQueue
 from armfleet.world import World
 
 logger = logging.getLogger("armfleet")

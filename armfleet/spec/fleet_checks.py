@@ -11,14 +11,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import NoReturn
 
+from armfleet.checks.located_yaml import LocatedDict
+from armfleet.checks.names import check_arm_name
 from armfleet.controllers.parameters import load_parameters
 from armfleet.controllers.position_controller import check_target
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError
 from armfleet.kinematics import ArmKinematics
-from armfleet.located_yaml import LocatedDict
-from armfleet.names import check_arm_name
 from armfleet.spec.fleet_spec import ArmSpec
 from armfleet.spec.spec_reader import SpecReader
 

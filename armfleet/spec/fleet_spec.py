@@ -6,8 +6,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.objects.object_spec import ObjectSpec
-from armfleet.spawn_pose import SpawnPose
 
 
 @dataclass(frozen=True)

@@ -27,8 +27,8 @@ from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
+from armfleet.checks.located_yaml import LocatedDict
 from armfleet.errors import ObjectError
-from armfleet.located_yaml import LocatedDict
 from armfleet.objects.object_spec import (
     DEFAULT_COLOR,
     DEFAULT_FRICTION,

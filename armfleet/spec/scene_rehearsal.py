@@ -1,9 +1,9 @@
 """A fleet's scene, rehearsed before any world exists: names, frame owners and clearance.
 
 The world refuses an arm whose frame another body owns
-(:mod:`armfleet.frame_registry`) or that would touch something at its start
-configuration (:mod:`armfleet.start_clearance`), and an object that would touch
-an arm or overlap the floor or an object (:mod:`armfleet.object_clearance`). A
+(:mod:`armfleet.frames.frame_registry`) or that would touch something at its start
+configuration (:mod:`armfleet.physics.start_clearance`), and an object that would touch
+an arm or overlap the floor or an object (:mod:`armfleet.objects.object_clearance`). A
 fleet that passes here must not be refused later, half brought up; so every
 launch (:func:`armfleet.launch`, whether the spec comes from a file, from Python
 or from ``armfleet spawn``'s command line) and every ``launch --check`` puts the
@@ -37,9 +37,9 @@ from typing import NoReturn
 
 import pybullet as p
 
-from armfleet.arm_assembly import check_controller_parameters, start_positions
-from armfleet.bus import Bus
-from armfleet.contact_monitor import ContactMonitor
+from armfleet.arms.arm_assembly import check_controller_parameters, start_positions
+from armfleet.checks.located_yaml import LocatedDict
+from armfleet.checks.names import check_arm_name
 from armfleet.description import ArmDescription, ModelLibrary
 from armfleet.errors import (
     ArmfleetError,
@@ -48,20 +48,20 @@ from armfleet.errors import (
     ObjectError,
     StartPoseCollision,
 )
-from armfleet.frame_registry import FrameOwner, FrameRegistry, arm_frames
-from armfleet.ground import create_ground
+from armfleet.frames.frame_registry import FrameOwner, FrameRegistry, arm_frames
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.kinematics import ArmKinematics
-from armfleet.located_yaml import LocatedDict
 from armfleet.messages import FloatArray
-from armfleet.names import check_arm_name
-from armfleet.object_clearance import place_clear_object
 from armfleet.objects.object_arguments import object_arguments
+from armfleet.objects.object_clearance import place_clear_object
 from armfleet.objects.object_spec import ObjectSpec, object_spec
-from armfleet.spawn_pose import SpawnPose
+from armfleet.physics.contact_monitor import ContactMonitor
+from armfleet.physics.ground import create_ground
+from armfleet.physics.start_clearance import load_clear_body
+from armfleet.runtime.bus import Bus
 from armfleet.spec.fleet_spec import ArmSpec, FleetSpec, WorldSpec
 from armfleet.spec.spec_error import SpecError
 from armfleet.spec.spec_reader import SpecReader
-from armfleet.start_clearance import load_clear_body
 
 
 @dataclass(frozen=True)

@@ -31,15 +31,15 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from armfleet.checks.located_yaml import LocatedDict, YamlDocumentError, load_located, read_located
 from armfleet.checks.time_step import MAX_DT_S, MIN_DT_S
 from armfleet.checks.user_paths import file_problem, given_path
 from armfleet.controllers.parameters import check_parameter
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
+from armfleet.description.data_folders import data_dir
 from armfleet.errors import ParameterError
-from armfleet.located_yaml import LocatedDict, YamlDocumentError, load_located, read_located
-from armfleet.paths import data_dir
-from armfleet.spawn_pose import SpawnPose
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
 from armfleet.spec.object_entries import read_objects
@@ -88,7 +88,7 @@ def parse_spec(text: str | bytes, source: str, base_dir: Path | None = None) -> 
     """Check ``text`` (YAML; bytes must be UTF-8) as a launch spec from ``source``.
 
     Raises:
-        SpecError: at the first problem, with its line (see :mod:`armfleet.located_yaml`
+        SpecError: at the first problem, with its line (see :mod:`armfleet.checks.located_yaml`
             for the bounds on size, nesting and aliases).
     """
     try:

@@ -7,7 +7,7 @@ import math
 from collections.abc import Collection, Sequence
 from typing import Any
 
-from armfleet.located_yaml import LocatedDict, LocatedList
+from armfleet.checks.located_yaml import LocatedDict, LocatedList
 from armfleet.spec.spec_error import SpecError
 
 _MISSING = object()

@@ -7,6 +7,11 @@
 See docs/sweeps.md: how to write a task and a randomization, local and cluster use.
 """
 
+from armfleet.checks.extras import require_extra
+
+require_extra("Sweeps", "sweeps", "ray", "pyarrow")
+
+
 from armfleet.sweeps.definition import SweepDefinition, load_sweep, shipped_scenarios
 from armfleet.sweeps.errors import SweepError
 from armfleet.sweeps.results_file import read_results

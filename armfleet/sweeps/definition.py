@@ -4,7 +4,7 @@ It is read from a launch spec's ``sweep:`` section, or from a sweep file that na
 spec (``spec: handover`` or a path next to it)::
 
     sweep:                                    # in a launch spec; a sweep file has these
-      task: armfleet.sweeps.scenarios.handover:handover   # keys at its top, plus spec:
+      task: armfleet.scenarios.handover:handover   # keys at its top, plus spec:
       base_seed: 0                            # run i has seed base_seed + i
       runs: 100                               # default of --runs
       run_timeout_s: 300                      # a run past it fails (its row says so)
@@ -24,10 +24,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from armfleet.checks.located_yaml import LocatedDict, YamlDocumentError, read_located
+from armfleet.checks.number_ranges import MAX_SWEEP_RUNS
 from armfleet.checks.real_numbers import is_real
 from armfleet.checks.user_paths import file_problem, given_path
-from armfleet.located_yaml import LocatedDict, YamlDocumentError, read_located
-from armfleet.paths import data_dir
+from armfleet.description.data_folders import data_dir
 from armfleet.spec import FleetSpec, SpecError, load_spec
 from armfleet.spec.spec_reader import SpecReader
 from armfleet.sweeps.distributions import DistributionError, parse_distribution
@@ -38,7 +39,7 @@ from armfleet.sweeps.task_reference import TaskError, TaskReference, task_keywor
 SECTION_KEYS = ("task", "base_seed", "runs", "run_timeout_s", "parameters", "randomize")
 #: A run that has not ended after this long fails, unless the sweep says otherwise [s].
 DEFAULT_RUN_TIMEOUT_S = 600.0
-MAX_RUNS = 10_000_000
+MAX_RUNS = MAX_SWEEP_RUNS
 MAX_SEED = 2**62
 
 TaskValue = float | int | bool | str | tuple[float, ...]

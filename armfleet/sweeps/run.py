@@ -20,13 +20,13 @@ from typing import Any
 import numpy as np
 
 from armfleet.description import ModelLibrary
-from armfleet.launch import launch
 from armfleet.planning.ompl_search import restart_random_numbers
 from armfleet.sweeps.definition import SweepDefinition
 from armfleet.sweeps.randomization import apply_draws
 from armfleet.sweeps.results_schema import RUN_COLUMNS
 from armfleet.sweeps.run_timeout import RunTimedOut, RunTimeout
 from armfleet.sweeps.task_reference import Task
+from armfleet.world.launch import launch
 
 #: Longest error text kept in a row [characters].
 MAX_ERROR_CHARS = 2000

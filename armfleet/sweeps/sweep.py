@@ -10,9 +10,15 @@ from pathlib import Path
 
 import pyarrow as pa
 
-from armfleet.checks.number_ranges import NumberRange
+from armfleet.checks.number_ranges import (
+    SWEEP_BASE_SEED,
+    SWEEP_BATCH,
+    SWEEP_RUN_TIMEOUT_S,
+    SWEEP_RUNS,
+    SWEEP_WORKERS,
+)
 from armfleet.checks.user_paths import file_problem, given_path
-from armfleet.sweeps.definition import MAX_RUNS, SweepDefinition, load_sweep
+from armfleet.sweeps.definition import SweepDefinition, load_sweep
 from armfleet.sweeps.errors import SweepError
 from armfleet.sweeps.progress import SweepProgress
 from armfleet.sweeps.ray_session import check_address, ray_session
@@ -20,11 +26,11 @@ from armfleet.sweeps.results_file import ResultsWriter, journal_path, read_resul
 from armfleet.sweeps.results_schema import SweepMetadata
 from armfleet.sweeps.runner import RunCounts, SweepDriver
 
-RUNS = NumberRange(1, MAX_RUNS, "runs", integer=True)
-WORKERS = NumberRange(1, 100_000, "workers", integer=True)
-RUN_TIMEOUT_S = NumberRange(0.001, 86_400, "seconds")
-BASE_SEED = NumberRange(0, 2**62, "seed", integer=True)
-BATCH = NumberRange(1, 10_000, "runs per task", integer=True)
+RUNS = SWEEP_RUNS
+WORKERS = SWEEP_WORKERS
+RUN_TIMEOUT_S = SWEEP_RUN_TIMEOUT_S
+BASE_SEED = SWEEP_BASE_SEED
+BATCH = SWEEP_BATCH
 
 
 @dataclass(frozen=True)

@@ -98,7 +98,7 @@ def task_reference(text: str, base_dir: Path | None = None) -> TaskReference:
     if not function or not all(part.isidentifier() for part in head.split(".")):
         raise TaskError(
             f"task {text!r}: give module:function (e.g. "
-            "armfleet.sweeps.scenarios.reach:reach) or a file task.py[:function]"
+            "armfleet.scenarios.reach:reach) or a file task.py[:function]"
         )
     if not function.isidentifier():
         raise TaskError(f"task {text!r}: {function!r} is not a function name")

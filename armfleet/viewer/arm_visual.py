@@ -13,12 +13,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from armfleet import topics
 from armfleet.messages import JointCommand
 from armfleet.viewer.commands import TransformPacker, Updates, property_command
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
-    from armfleet.bus import Subscription
+    from armfleet.arms.arm import Arm
+    from armfleet.runtime.bus import Subscription
 
 #: Joint motion below which an arm is not redrawn [rad or m].
 REDRAW_TOLERANCE = 1e-5
@@ -113,7 +114,7 @@ class ArmVisual:
         self._last_q: npt.NDArray[np.float64] | None = None
         bus = arm.position_controller.arm.bus
         self._subscription: Subscription | None = bus.subscribe(
-            f"{arm.namespace}/position_controller/commands", self._on_command
+            topics.position_commands(arm.name), self._on_command
         )
 
     # -- live updates -------------------------------------------------------------------

@@ -31,11 +31,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from armfleet import topics
 from armfleet.messages import FloatArray, JointCommand, PlannedMotion
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
-    from armfleet.bus import Subscription
+    from armfleet.arms.arm import Arm
+    from armfleet.runtime.bus import Subscription
 
 logger = logging.getLogger("armfleet")
 
@@ -128,11 +129,9 @@ class _Follower:
         bus = self.controller.arm.bus
         name = arm.name
         self.subscriptions: list[Subscription] = [
+            bus.subscribe(topics.planned_motion(arm.name), lambda plan: owner.on_plan(name, plan)),
             bus.subscribe(
-                f"{arm.namespace}/planned_motion", lambda plan: owner.on_plan(name, plan)
-            ),
-            bus.subscribe(
-                f"{arm.namespace}/position_controller/commands",
+                topics.position_commands(arm.name),
                 lambda command: owner.on_command(name, command),
             ),
         ]

@@ -29,7 +29,7 @@ from armfleet.checks.flags import flag
 from armfleet.viewer.errors import ViewerError
 
 if TYPE_CHECKING:
-    from armfleet.arm import Arm
+    from armfleet.arms.arm import Arm
     from armfleet.messages import PlannedMotion
     from armfleet.objects import WorldObject
     from armfleet.viewer.arm_visual import ArmVisual

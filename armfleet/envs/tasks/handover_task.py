@@ -29,8 +29,8 @@ from armfleet.envs.choices import choose
 from armfleet.envs.errors import InvalidOption
 from armfleet.envs.tasks.task import Evaluation, Task
 from armfleet.messages import FloatArray
+from armfleet.scenarios.handover import MAT_TO_BAR_CENTRE_M, TOLERANCE_M
 from armfleet.spec import FleetSpec, load_spec
-from armfleet.sweeps.scenarios.handover import MAT_TO_BAR_CENTRE_M, TOLERANCE_M
 from armfleet.world import World
 
 ARMS = ("bob", "toby")

@@ -1,9 +1,9 @@
 """Reach: a row of Pandas, each sent to a random reachable tool0 pose.
 
-The scene is the Reach sweep's (:mod:`armfleet.sweeps.scenarios.reach`): ``arm_count``
+The scene is the Reach sweep's (:mod:`armfleet.scenarios.reach`): ``arm_count``
 Pandas ``arm0``, ``arm1``, ... along x, ``spacing_m`` apart, facing +y. At reset each arm
 gets one target drawn with the episode's generator
-(:func:`~armfleet.sweeps.scenarios.reach_targets.draw_row_targets`: the tool0 pose of a
+(:func:`~armfleet.scenarios.reach_targets.draw_row_targets`: the tool0 pose of a
 random joint configuration clear of the limits, the floor and the arm itself).
 Reward: minus the sum over arms of tool0's distance to its target's position [m] (dense);
 success once every tool0 is within ``tolerance_m`` of its target's position.
@@ -19,12 +19,12 @@ from armfleet.envs.errors import InvalidOption
 from armfleet.envs.observations import pose_space
 from armfleet.envs.poses import pose_vector
 from armfleet.envs.tasks.task import Evaluation, Task
+from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import FloatArray
-from armfleet.spawn_pose import SpawnPose
+from armfleet.scenarios.reach import FACING_DEG, MODEL
+from armfleet.scenarios.reach_targets import draw_row_targets
 from armfleet.spec import FleetSpec
 from armfleet.spec.fleet_spec import ArmSpec, WorldSpec
-from armfleet.sweeps.scenarios.reach import FACING_DEG, MODEL
-from armfleet.sweeps.scenarios.reach_targets import draw_row_targets
 from armfleet.world import World
 
 #: Arms a Reach environment takes.

@@ -1,0 +1,16 @@
+"""Optional features and the extras that install them (pyproject.toml's
+``[project.optional-dependencies]``): a missing one is one line with the pip command."""
+
+from __future__ import annotations
+
+from importlib.util import find_spec
+
+from armfleet.errors import MissingExtra
+
+
+def require_extra(feature: str, extra: str, *modules: str) -> None:
+    """Raise :class:`~armfleet.errors.MissingExtra` unless every module of ``modules``
+    (top-level import names, e.g. ``"ray"``) is installed; imports none of them."""
+    for module in modules:
+        if find_spec(module) is None:
+            raise MissingExtra(feature, extra, module)
