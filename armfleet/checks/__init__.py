@@ -7,4 +7,6 @@ number, not text, bool or None), :mod:`~armfleet.checks.flags` (a flag is
 True or False), :mod:`~armfleet.checks.number_ranges` (timeouts, durations,
 steps, ports, coordinates, angles), :mod:`~armfleet.checks.time_step` (the
 physics step) and :mod:`~armfleet.checks.user_paths` (paths and files).
+
+Rule: the lowest room; imports only :mod:`armfleet.errors` and :mod:`armfleet.messages`.
 """

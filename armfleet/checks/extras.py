@@ -12,5 +12,9 @@ def require_extra(feature: str, extra: str, *modules: str) -> None:
     """Raise :class:`~armfleet.errors.MissingExtra` unless every module of ``modules``
     (top-level import names, e.g. ``"ray"``) is installed; imports none of them."""
     for module in modules:
-        if find_spec(module) is None:
+        try:
+            found = find_spec(module) is not None
+        except (ImportError, ValueError):  # a broken or blocked install is a missing one
+            found = False
+        if not found:
             raise MissingExtra(feature, extra, module)

@@ -7,6 +7,9 @@
 Importing this package registers ``armfleet/Reach-v0``, ``armfleet/Handover-v0`` and
 ``armfleet/Scene-v0`` (any launch spec); ``import armfleet`` alone does not load it (nor
 Gymnasium).
+
+Rule: a front end (the ``envs`` extra: Gymnasium, PettingZoo); imports the world,
+the scenarios and the core below; nothing but the CLI imports it.
 """
 
 from armfleet.checks.extras import require_extra

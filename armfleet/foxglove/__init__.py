@@ -5,6 +5,10 @@ Foxglove WebSocket server (the ``foxglove-sdk`` package's) that publishes every 
 with the recording's schemas and JSON encoding, serves the arms' URDFs and meshes,
 and offers ``/move``, ``/move_together``, ``/grip`` and ``/reset`` to the Service Call
 panel. See docs/foxglove.md.
+
+Rule: a front end (the ``foxglove`` extra); attaches to the world as a
+:class:`~armfleet.world.WorldListener`; imports :mod:`armfleet.services`,
+:mod:`armfleet.recording` (its encoders) and the core below.
 """
 
 from __future__ import annotations

@@ -6,6 +6,10 @@
 - :mod:`~armfleet.planning.path_timing`: timing within every joint's limits;
 - :mod:`~armfleet.planning.moving_arms`: arms that move while a plan is made;
 - :mod:`~armfleet.planning.motion_planner`: the world's planner (plan, execute).
+
+Rule: imports :mod:`armfleet.motion`, :mod:`armfleet.objects`,
+:mod:`armfleet.controllers` and below; arms are seen through the
+:class:`~armfleet.planning.planned_arm.PlannedArm` protocol, never the user's handle.
 """
 
 from armfleet.motion.pose_goal import PoseGoal

@@ -4,6 +4,9 @@
 >>> world.run(2.0); recorder.stop()                    # doctest: +SKIP
 >>> run = armfleet.open_recording("run.mcap")          # doctest: +SKIP
 >>> armfleet.plot_recording(run)                       # doctest: +SKIP
+
+Rule: a front end; imports :mod:`armfleet.viewer` (replay) and the world and the
+core below; nothing but Foxglove (its encoders), the CLI and the public API import it.
 """
 
 from armfleet.recording.arm_record import ArmRecord

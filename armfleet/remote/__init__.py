@@ -5,6 +5,10 @@
 >>> bob = client.arm("bob")
 >>> bob.move_to(bob.positions + 0.2); bob.wait()
 >>> client.close()
+
+Rule: a front end (the ZeroMQ transport); imports :mod:`armfleet.services` and
+the core below; its handles call the world through the
+:class:`~armfleet.remote.service_caller.ServiceCaller` protocol.
 """
 
 from armfleet.remote.client import Client, connect

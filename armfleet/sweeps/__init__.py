@@ -5,6 +5,9 @@
 >>> result.table.to_pandas().groupby("task.arm_count").reached_fraction.mean()
 
 See docs/sweeps.md: how to write a task and a randomization, local and cluster use.
+
+Rule: a front end (the ``sweeps`` extra: Ray, pyarrow); imports the scenarios, the
+world and the core below; nothing but the CLI and the public API (on first use) import it.
 """
 
 from armfleet.checks.extras import require_extra

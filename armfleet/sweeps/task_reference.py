@@ -102,7 +102,14 @@ def task_reference(text: str, base_dir: Path | None = None) -> TaskReference:
         )
     if not function.isidentifier():
         raise TaskError(f"task {text!r}: {function!r} is not a function name")
+    if head.startswith(_MOVED_SCENARIOS):  # the shipped scenarios' room before 0.2
+        head = "armfleet.scenarios." + head.removeprefix(_MOVED_SCENARIOS)
     return TaskReference(text, head, function)
+
+
+#: Where the shipped scenarios lived until they got a room of their own
+#: (:mod:`armfleet.scenarios`); sweep files naming them there keep working.
+_MOVED_SCENARIOS = "armfleet.sweeps.scenarios."
 
 
 def task_keywords(task: Task, name: str) -> set[str]:

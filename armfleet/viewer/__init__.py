@@ -6,6 +6,9 @@ http://127.0.0.1:45321/static/
 
 Importing this package is cheap: MeshCat, Pinocchio's visualizer, ZMQ and
 tornado load only when a viewer starts.
+
+Rule: a front end; attaches to the world as a :class:`~armfleet.world.WorldListener`
+(:mod:`~armfleet.viewer.world_link`); imports the world and the core below.
 """
 
 from armfleet.viewer.errors import ViewerError, ViewerTimeout
