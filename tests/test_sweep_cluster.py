@@ -9,11 +9,14 @@ start once in five tries ("Starting Ray client server failed"), which is Ray's, 
 
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -32,35 +35,52 @@ def free_port() -> int:
 
 
 @pytest.fixture(scope="module")
-def head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[int, int, Path]]:
+def head() -> Iterator[tuple[int, int, Path]]:
     """A one-machine cluster: (GCS port, Ray Client port, its folder)."""
-    folder = tmp_path_factory.mktemp("ray-head")
+    # A short folder: Ray's Unix sockets live in it, and their paths may not exceed 107
+    # bytes (a pytest-xdist worker's tmp_path is too deep).
+    folder = Path(tempfile.mkdtemp(prefix="ray-", dir="/tmp"))
     gcs, client = free_port(), free_port()
+    # Every port the head opens is free and its own: a private local Ray instance of
+    # another test (on the other pytest worker) holds Ray's default agent ports.
+    ports = [
+        f"--{option}={free_port()}"
+        for option in (
+            "node-manager-port", "object-manager-port", "dashboard-agent-listen-port",
+            "dashboard-agent-grpc-port", "runtime-env-agent-port", "metrics-export-port",
+        )
+    ]  # fmt: skip
     env = {**os.environ, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}  # loopback only
+    log = (folder / "ray-start.log").open("w")
     process = subprocess.Popen(
         [str(RAY), "start", "--head", "--block", f"--port={gcs}",
-         f"--ray-client-server-port={client}", "--num-cpus=2", "--include-dashboard=false",
-         "--disable-usage-stats", f"--temp-dir={folder}"],
-        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+         f"--ray-client-server-port={client}", *ports, "--num-cpus=2",
+         "--include-dashboard=false", "--disable-usage-stats", f"--temp-dir={folder}"],
+        env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
     )  # fmt: skip
     try:
         deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline:  # until its client port answers
             try:
                 socket.create_connection(("127.0.0.1", client), timeout=1).close()
                 break
             except OSError:
-                assert process.poll() is None, "ray start --head ended"
+                if process.poll() is not None:
+                    tail = (folder / "ray-start.log").read_text()[-2000:]
+                    pytest.fail(f"ray start --head ended:\n{tail}")
                 time.sleep(0.3)
         else:
             pytest.fail("the head node did not start within 60 s")
         yield gcs, client, folder
     finally:
-        os.killpg(process.pid, signal.SIGINT)  # --block stops the node on Ctrl-C
+        with contextlib.suppress(ProcessLookupError):  # it may have ended by itself
+            os.killpg(process.pid, signal.SIGINT)  # --block stops the node on Ctrl-C
         try:
             process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             os.killpg(process.pid, signal.SIGKILL)
+        log.close()
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def test_a_sweep_joins_a_cluster_by_address(head: tuple[int, int, Path], tmp_path: Path) -> None:
