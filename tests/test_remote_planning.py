@@ -123,8 +123,9 @@ def test_a_plan_longer_than_the_client_timeout_is_waited_for(cell: Cell) -> None
     at_start(client)
     client.spawn("carl", at=(-1.5, 0.0))
     try:
-        with Client(cell.world.address, timeout=0.05) as hurried:
-            bob = hurried.arm("bob")
+        with Client(cell.world.address) as hurried:
+            bob = hurried.arm("bob")  # the handle, at the usual timeout (not what is tested)
+            hurried.timeout = 0.05  # the plan's request: far shorter than the plan
             duration = bob.move_to(tool_low(-0.9), avoid_collisions=True, timeout_s=5.0)
         assert duration > 0.0
         bob = client.arm("bob")
