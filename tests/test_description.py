@@ -383,6 +383,7 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
         check=True,
         capture_output=True,
         timeout=900,
+        env={**os.environ, "ARMFLEET_QUIET_BUILD": "1"},  # no compile notice on the terminal
     )  # fmt: skip
     (built,) = out.glob("armfleet-*.whl")
     return built

@@ -6,7 +6,7 @@ a stop or a new plan takes over from wherever that reference is.
 
 Motions are planned with Ruckig's Python bindings. Where armfleet's compiled part is
 built, they are stepped by Ruckig's C++ library directly into the reference arrays
-(``cpp/fleet_kernel.cpp``'s ``ReferenceStepper``: no Python lists per step); else,
+(``cpp/reference_stepper.cpp``'s ``ReferenceStepper``: no Python lists per step); else,
 or with ``compiled=False``, by the bindings' ``update``. Both run the same algorithm
 on the same input (``tests/test_fleet_update.py`` compares whole runs).
 """

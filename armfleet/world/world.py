@@ -85,7 +85,7 @@ class World:
             start, the world runs without it and the reason is logged.
         viewer_port: web port of the viewer (1..65535); a free one by default.
         compiled_control: update the position controllers of arms on the fleet path in
-            compiled code (``cpp/fleet_kernel.cpp``); False: in numpy, the reference it is
+            compiled code (``cpp/``); False: in numpy, the reference it is
             tested against. Results agree to 1e-12 (docs/performance.md).
     """
 
