@@ -27,7 +27,8 @@ from tests.viewer_helpers import bob_and_toby_viewed, expected_visual_poses
 
 VIEWPORT_WIDTH, VIEWPORT_HEIGHT = 960, 600
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
-#: Software WebGL on 2 cores takes seconds per Panda; leave a wide margin.
+#: Every wait below is for a page state (an event); this caps it. Software WebGL on 2 cores
+#: shared with another pytest worker takes seconds per Panda: leave a wide margin.
 LOAD_TIMEOUT_MS = 90_000
 PANDA_MESHES = 11
 #: Browser poses are float64 from the server; the viewer redraws an arm once it
@@ -277,7 +278,7 @@ def test_page_follows_toby_and_not_bob(live_page: LivePage, live: armfleet.World
             return pose.every((v, i) => Math.abs(v - expected[i]) < tolerance);
         }}""",
         arg=[paths, expected.T.flatten().tolist(), POSE_TOLERANCE],
-        timeout=15_000,
+        timeout=LOAD_TIMEOUT_MS,
     )
     bob_after, toby_after = (as_matrix(m) for m in page.evaluate(NODE_POSES_JS, paths))
     assert np.abs(toby_after[:3, 3] - toby_before[:3, 3]).max() > 0.05, "toby moved"
@@ -296,7 +297,7 @@ def test_replay_plays_from_file(browser: Any, live: armfleet.World, tmp_path: Pa
             arg={"bob": PANDA_MESHES, "toby": PANDA_MESHES},
             timeout=LOAD_TIMEOUT_MS,
         )
-        tab.wait_for_function("() => viewer.animator.actions.length > 0")
+        tab.wait_for_function("() => viewer.animator.actions.length > 0", timeout=LOAD_TIMEOUT_MS)
         actions = tab.evaluate(REPLAY_ACTIONS_JS)
         assert set(actions["byArm"]) == {"bob", "toby"}, "one track set per arm"
         for name, tracks in actions["byArm"].items():
@@ -356,7 +357,7 @@ def test_objects_in_the_live_page_and_the_replay(browser: Any, tmp_path: Path) -
     try:
         tab.goto(replay.resolve().as_uri())
         tab.wait_for_function(OBJECTS_LOADED_JS, arg=names, timeout=LOAD_TIMEOUT_MS)
-        tab.wait_for_function("() => viewer.animator.actions.length > 0")
+        tab.wait_for_function("() => viewer.animator.actions.length > 0", timeout=LOAD_TIMEOUT_MS)
         path = ["/meshcat/objects/can"]
         start = as_matrix(tab.evaluate(SEEK_JS, [0.0, path])[0])
         end = as_matrix(tab.evaluate(SEEK_JS, [1.0, path])[0])
@@ -405,14 +406,14 @@ def test_page_draws_a_planned_path_while_it_runs(live_page: LivePage, live: armf
         bob.move_to(goal, avoid_collisions=True)
         live.step()
         [plan] = announced
-        page.wait_for_function(f"() => ({PLAN_LINE_JS})('bob') !== null", timeout=15_000)
+        page.wait_for_function(f"() => ({PLAN_LINE_JS})('bob') !== null", timeout=LOAD_TIMEOUT_MS)
         line = page.evaluate(PLAN_LINE_JS, "bob")
         assert line == {"vertices": len(plan.tool_path), "color": PLAN_COLOR, "visible": True}
         assert plan_colored_pixels(screenshot(page, "viewer_planned_path.png")) >= 20
         while bob.is_moving:
             live.run(0.05)
         live.step()
-        page.wait_for_function(f"() => ({PLAN_LINE_JS})('bob') === null", timeout=15_000)
+        page.wait_for_function(f"() => ({PLAN_LINE_JS})('bob') === null", timeout=LOAD_TIMEOUT_MS)
         assert plan_colored_pixels(screenshot(page)) <= 2
     finally:
         subscription.cancel()
