@@ -4,21 +4,20 @@
 >>> world = armfleet.World()
 >>> bob = world.spawn("bob", model="panda", at=(0, 0))
 
-The public API. Importing it loads the core (PyBullet, Pinocchio, Ruckig, OMPL); the live
-API's client and sweeps load on first use (``armfleet.connect``, ``armfleet.sweep``), and
-the optional extras (Ray, pyarrow, Foxglove, Gymnasium, PettingZoo, matplotlib) only in
-the features that need them. docs/design.md shows the package's rooms.
+The public API. Importing it loads PyBullet, the errors and the messages; every other name
+loads its room on first use (``armfleet.World``: the simulator; ``armfleet.connect``: the
+live API's client; ``armfleet.sweep``: Ray), and the optional extras (Ray, pyarrow,
+Foxglove, Gymnasium, PettingZoo, matplotlib) only in the features that need them.
+docs/design.md shows the package's rooms.
 """
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from armfleet.physics.quiet_pybullet import import_quietly
 
 import_quietly()
 
 from armfleet._version import __version__
-from armfleet.arms.arm import Arm
-from armfleet.arms.gripper import Gripper
 from armfleet.errors import (
     ArmfleetError,
     ArmInMotion,
@@ -38,7 +37,6 @@ from armfleet.errors import (
     WorldBusy,
     WorldClosed,
 )
-from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import (
     ArmMode,
     BringupEvent,
@@ -53,46 +51,61 @@ from armfleet.messages import (
     TFMessage,
     TransformStamped,
 )
-from armfleet.objects import WorldObject
-from armfleet.planning import FailureReason, Plan, PlanningFailed, PoseGoal
-from armfleet.recording import (
-    Recorder,
-    Recording,
-    RecordingError,
-    open_recording,
-    plot_recording,
-    record,
-)
-from armfleet.runtime.bus import Bus
-from armfleet.spec import FleetSpec, SpecError, load_spec
-from armfleet.world import World
-from armfleet.world.launch import launch
+from armfleet.runtime.lazy_exports import lazy_exports
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the names below, for type checkers; loaded on first use
+    from armfleet.arms.arm import Arm
+    from armfleet.arms.gripper import Gripper
+    from armfleet.frames.spawn_pose import SpawnPose
+    from armfleet.objects import WorldObject
+    from armfleet.planning import FailureReason, Plan, PlanningFailed, PoseGoal
+    from armfleet.recording import (
+        Recorder,
+        Recording,
+        RecordingError,
+        open_recording,
+        plot_recording,
+        record,
+    )
     from armfleet.remote import connect
+    from armfleet.runtime.bus import Bus
+    from armfleet.spec import FleetSpec, SpecError, load_spec
     from armfleet.sweeps.errors import SweepError
     from armfleet.sweeps.sweep import SweepResult, sweep
+    from armfleet.world import World
+    from armfleet.world.launch import launch
 
-#: Public names whose package loads on first use: name -> module.
-_ON_FIRST_USE = {
-    "connect": "armfleet.remote",
-    "sweep": "armfleet.sweeps",
-    "SweepError": "armfleet.sweeps",
-    "SweepResult": "armfleet.sweeps",
-}
-
-
-def __getattr__(name: str) -> Any:
-    """Load the live API's client and the sweeps only when first asked for (PEP 562)."""
-    module = _ON_FIRST_USE.get(name)
-    if module is None:
-        raise AttributeError(f"module 'armfleet' has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
+# Everything but the errors and messages loads on first use, so that `import armfleet` (and
+# a command-line call that only talks to a running world) starts without the simulator.
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "Arm": "armfleet.arms.arm",
+        "Gripper": "armfleet.arms.gripper",
+        "SpawnPose": "armfleet.frames.spawn_pose",
+        "WorldObject": "armfleet.objects",
+        "FailureReason": "armfleet.planning",
+        "Plan": "armfleet.planning",
+        "PlanningFailed": "armfleet.planning",
+        "PoseGoal": "armfleet.planning",
+        "Recorder": "armfleet.recording",
+        "Recording": "armfleet.recording",
+        "RecordingError": "armfleet.recording",
+        "open_recording": "armfleet.recording",
+        "plot_recording": "armfleet.recording",
+        "record": "armfleet.recording",
+        "Bus": "armfleet.runtime.bus",
+        "FleetSpec": "armfleet.spec",
+        "SpecError": "armfleet.spec",
+        "load_spec": "armfleet.spec",
+        "World": "armfleet.world",
+        "launch": "armfleet.world.launch",
+        "connect": "armfleet.remote",
+        "sweep": "armfleet.sweeps",
+        "SweepError": "armfleet.sweeps",
+        "SweepResult": "armfleet.sweeps",
+    },
+)
 
 __all__ = [
     "Arm",

@@ -7,6 +7,18 @@ Rule: pure computation on a model; imports only :mod:`armfleet.checks` and below
 PyBullet, no bus).
 """
 
-from armfleet.kinematics.arm_kinematics import ArmKinematics
+from typing import TYPE_CHECKING
+
+from armfleet.runtime.lazy_exports import lazy_exports
+
+if TYPE_CHECKING:  # the names below, for type checkers; loaded on first use
+    from armfleet.kinematics.arm_kinematics import ArmKinematics
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "ArmKinematics": "armfleet.kinematics.arm_kinematics",
+    },
+)
 
 __all__ = ["ArmKinematics"]

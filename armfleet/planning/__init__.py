@@ -12,12 +12,30 @@ Rule: imports :mod:`armfleet.motion`, :mod:`armfleet.objects`,
 :class:`~armfleet.planning.planned_arm.PlannedArm` protocol, never the user's handle.
 """
 
-from armfleet.motion.pose_goal import PoseGoal
-from armfleet.planning.failure import FailureReason, PlanningFailed
-from armfleet.planning.motion_planner import MotionPlanner
-from armfleet.planning.plan import Plan
-from armfleet.planning.problem import PlanningProblem
-from armfleet.planning.scene import PlanningScene
+from typing import TYPE_CHECKING
+
+from armfleet.runtime.lazy_exports import lazy_exports
+
+if TYPE_CHECKING:  # the names below, for type checkers; loaded on first use
+    from armfleet.motion.pose_goal import PoseGoal
+    from armfleet.planning.failure import FailureReason, PlanningFailed
+    from armfleet.planning.motion_planner import MotionPlanner
+    from armfleet.planning.plan import Plan
+    from armfleet.planning.problem import PlanningProblem
+    from armfleet.planning.scene import PlanningScene
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "PoseGoal": "armfleet.motion.pose_goal",
+        "FailureReason": "armfleet.planning.failure",
+        "PlanningFailed": "armfleet.planning.failure",
+        "MotionPlanner": "armfleet.planning.motion_planner",
+        "Plan": "armfleet.planning.plan",
+        "PlanningProblem": "armfleet.planning.problem",
+        "PlanningScene": "armfleet.planning.scene",
+    },
+)
 
 __all__ = [
     "FailureReason",

@@ -9,7 +9,20 @@ Rule: imports every core room below it (spec, arms, safety, planning, ...); neve
 end (viewer, recording, Foxglove, the live API, sweeps, environments): they attach.
 """
 
-from armfleet.world.world import World
-from armfleet.world.world_listener import WorldListener
+from typing import TYPE_CHECKING
+
+from armfleet.runtime.lazy_exports import lazy_exports
+
+if TYPE_CHECKING:  # the names below, for type checkers; loaded on first use
+    from armfleet.world.world import World
+    from armfleet.world.world_listener import WorldListener
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "World": "armfleet.world.world",
+        "WorldListener": "armfleet.world.world_listener",
+    },
+)
 
 __all__ = ["World", "WorldListener"]
