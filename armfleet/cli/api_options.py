@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
 from armfleet.checks.network_address import DEFAULT_BIND, check_bind_host
 from armfleet.cli.number_arguments import port_or_free, request_timeout
 from armfleet.cli.parser import OneLineParser
-from armfleet.remote import Client, RunState, WorldServer, connect
-from armfleet.remote.client import DEFAULT_TIMEOUT_S
-from armfleet.world import World
+from armfleet.remote.client import DEFAULT_TIMEOUT_S, Client, connect
+
+if TYPE_CHECKING:  # the server side loads only for the commands that start a world
+    from armfleet.remote.server import WorldServer
+    from armfleet.services.run_state import RunState
+    from armfleet.world import World
 
 #: Longest time one thread of the world process holds the GIL when others wait [s].
 GIL_SWITCH_S = 0.001
@@ -38,6 +42,8 @@ def check_api_arguments(args: argparse.Namespace) -> None:
 def start_api(world: World, run_state: RunState, args: argparse.Namespace) -> WorldServer | None:
     """Serve ``world`` as the options say; print its address (unless ``--quiet``: clients
     find it anyway) and, on stderr, a warning if other machines can reach it."""
+    from armfleet.remote.server import WorldServer
+
     if getattr(args, "no_api", False):
         return None
     # Let the stepping and the server threads take turns every 1 ms rather than 5 ms:

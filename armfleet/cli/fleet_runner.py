@@ -8,6 +8,7 @@ import signal
 import sys
 import time
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from armfleet import topics
 from armfleet.cli.api_options import check_api_arguments, start_api
@@ -17,14 +18,17 @@ from armfleet.cli.record_option import RunRecording
 from armfleet.cli.status_line import status_line
 from armfleet.cli.world_loop import run_world
 from armfleet.messages import BringupEvent
-from armfleet.remote import RunState
-from armfleet.spec import FleetSpec
-from armfleet.world import World
-from armfleet.world.launch import launch
+
+if TYPE_CHECKING:  # types only; the simulator loads when a world starts
+    from armfleet.spec import FleetSpec
+    from armfleet.world import World
 
 
 def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
     """Bring the spec's arms up, run until ``--duration`` or Ctrl-C/SIGTERM, close cleanly."""
+    from armfleet.services.run_state import RunState
+    from armfleet.world.launch import launch
+
     if hasattr(args, "api_port"):
         check_api_arguments(args)
     recording = RunRecording(args.record, spec, quiet=args.quiet)

@@ -12,8 +12,8 @@ from __future__ import annotations
 import argparse
 import socket
 
+from armfleet.checks.network_address import DEFAULT_BIND as LOOPBACK  # the viewer's too
 from armfleet.cli.parser import UsageError
-from armfleet.viewer.bridge import LOOPBACK
 
 
 def check_free(host: str, port: int, option: str, instead: str) -> None:

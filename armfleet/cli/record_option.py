@@ -4,11 +4,14 @@ of every topic (``.mcap``) or the viewer's standalone HTML replay (``.html``).""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from armfleet.cli.parser import UsageError
-from armfleet.recording import Recorder
-from armfleet.spec import FleetSpec
-from armfleet.world import World
+
+if TYPE_CHECKING:  # types only; the simulator loads when a world starts
+    from armfleet.recording import Recorder
+    from armfleet.spec import FleetSpec
+    from armfleet.world import World
 
 #: What ``--record`` writes, by extension.
 RECORD_KINDS = {
@@ -58,6 +61,8 @@ class RunRecording:
     def start(self, world: World) -> None:
         """Start an MCAP recording of ``world`` (before its first arm comes up)."""
         if self._path is not None and not self.needs_viewer:
+            from armfleet.recording.recorder import Recorder
+
             self._recorder = Recorder(world, self._path, spec=self._spec).start()
 
     def save(self, world: World) -> None:

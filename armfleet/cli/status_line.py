@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import shutil
 from collections import Counter
+from typing import TYPE_CHECKING
 
 from armfleet.messages import ArmMode, ArmStatus
-from armfleet.world import World
+
+if TYPE_CHECKING:  # types only; the simulator loads when a world starts
+    from armfleet.world import World
 
 #: Width assumed when the output is not a terminal (a pipe, a log file) [characters].
 NON_TTY_WIDTH = 100

@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
-from armfleet.remote import RunState
-from armfleet.world import World
+if TYPE_CHECKING:  # types only; the simulator loads when a world starts
+    from armfleet.remote import RunState
+    from armfleet.world import World
+
 
 STATUS_PERIOD_S = 1.0
 #: Falling further behind the wall clock than this (a long bring-up) is not caught up [s].

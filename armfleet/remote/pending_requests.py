@@ -17,7 +17,7 @@ from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import Future, InvalidStateError
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from armfleet.errors import ArmfleetError
 from armfleet.remote.outbox import Outbox
@@ -25,7 +25,9 @@ from armfleet.remote.wakeup import Wakeup
 from armfleet.services.errors import ConnectionLost, RequestTimeout, TooManyRequests
 from armfleet.services.protocol import MAX_IN_FLIGHT_PER_CLIENT, MAX_PENDING_REQUESTS, Service
 from armfleet.services.run_state import RunState
-from armfleet.world import World
+
+if TYPE_CHECKING:
+    from armfleet.world import World
 
 
 @dataclass(eq=False)

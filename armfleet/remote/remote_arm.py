@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from armfleet.checks import number_ranges
 from armfleet.checks.flags import flag
@@ -169,7 +169,8 @@ class RemoteArm:
         """
         linear = flag(linear, "linear")
         planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
-        if isinstance(pose, pin.SE3):
+        pin = sys.modules.get("pinocchio")  # a pinocchio.SE3 exists only once it is loaded
+        if pin is not None and isinstance(pose, pin.SE3):
             pose = pose.homogeneous  # the world checks it is a rigid transform
         values = self._vector(pose, "a pose must be a 4x4 matrix or (x, y, z) of numbers")
         key = "position" if np.ndim(pose) == 1 else "pose"
