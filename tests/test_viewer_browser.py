@@ -287,7 +287,15 @@ def test_page_follows_toby_and_not_bob(live_page: LivePage, live: armfleet.World
 
 
 def test_replay_plays_from_file(browser: Any, live: armfleet.World, tmp_path: Path) -> None:
+    """The saved replay holds the whole run: toby moves in it (this test moves him, so it
+    holds whichever tests of this file ran before it on its pytest worker), bob holds."""
     assert live.viewer is not None
+    toby = live.arm("toby")
+    lower, upper = toby.joint_limits
+    toby.move_to(np.clip(toby.positions - 0.4, lower + 0.1, upper - 0.1))
+    while toby.is_moving:
+        live.run(0.1)
+    live.run(0.1)
     replay = live.viewer.save(tmp_path / "run.html")
     tab = browser.new_page(viewport={"width": VIEWPORT_WIDTH, "height": VIEWPORT_HEIGHT})
     try:
