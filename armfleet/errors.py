@@ -400,3 +400,16 @@ class MissingExtra(ArmfleetError):
             f"{feature} needs armfleet's '{extra}' extra ({missing} is not installed): "
             f"pip install 'armfleet[{extra}]' (from a clone: pip install '.[{extra}]')"
         )
+
+
+class PackageNotFound(DescriptionError):
+    """A ROS package a description names (``package://``, ``$(find)``) found nowhere."""
+
+    def __init__(self, package: str, searched: Sequence[str]) -> None:
+        self.package = package
+        self.searched = tuple(searched)
+        super().__init__(
+            f"package {shown_name(package)} not found; searched: "
+            f"{', '.join(searched) or '(nothing)'}; add its folder with --package-path DIR "
+            "(or ARMFLEET_PACKAGE_PATH)"
+        )

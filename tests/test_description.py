@@ -21,7 +21,8 @@ import pytest
 from armfleet.description import ModelLibrary, ResourceResolver
 from armfleet.description.data_folders import DATA_FOLDERS, data_dir
 from armfleet.description.model_library import UPSTREAM_PROPERTY, XACRO_SUFFIX
-from armfleet.description.resource_resolver import PACKAGE_PATH_ENV, default_share_dirs
+from armfleet.description.package_finder import PACKAGE_PATH_ENV
+from armfleet.description.resource_resolver import default_share_dirs
 from armfleet.description.upstream_macro import XACRO_NS
 from armfleet.errors import DescriptionError, ResourceNotFound, UnknownModel
 from armfleet.frames.spawn_pose import SpawnPose
@@ -287,9 +288,12 @@ def test_default_resolver_searches_the_environment_then_example_robot_data(
     share_dirs = default_share_dirs()
     assert share_dirs[:2] == extra
     assert any((d / "example-robot-data").is_dir() for d in share_dirs[2:])
+    resolver = ResourceResolver()
     with pytest.raises(ResourceNotFound) as caught:
-        ResourceResolver().resolve("package://nowhere/x.stl")
-    assert caught.value.searched == tuple(str(d) for d in share_dirs)
+        resolver.resolve("package://nowhere/x.stl")
+    # The package finder's places (docs/own-robot.md): the environment's first, each named.
+    assert caught.value.searched == tuple(str(place) for place in resolver.finder.places)
+    assert [place.folder for place in resolver.finder.places][:2] == extra
 
 
 def test_missing_file_uri_names_its_folder(tmp_path: Path) -> None:
@@ -321,7 +325,7 @@ def test_missing_mesh_in_a_description_fails_loudly(tmp_path: Path) -> None:
     with pytest.raises(ResourceNotFound) as caught:
         library.expand("meshy", PREFIX)
     assert caught.value.uri == "package://nowhere/extra.stl"
-    assert caught.value.searched == tuple(str(d) for d in library.resolver.share_dirs)
+    assert caught.value.searched == tuple(str(place) for place in library.resolver.finder.places)
 
 
 def test_missing_upstream_urdf_fails_loudly(tmp_path: Path) -> None:

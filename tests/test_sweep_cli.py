@@ -36,6 +36,24 @@ def slow(world, rng, *, mass_kg=0.2):
 """
 
 
+#: A task whose runs after the first few wait until the test opens the gate: the sweep
+#: cannot finish before the test's Ctrl-C, however the machine is loaded.
+GATED_TASK = """
+import os, time, uuid
+
+def gated(world, rng, *, mass_kg=0.2):
+    world.run(0.05)
+    started = {folder!r}
+    open(os.path.join(started, uuid.uuid4().hex), "w").close()
+    deadline = time.monotonic() + 120
+    while len(os.listdir(started)) > 6 and not os.path.exists({gate!r}):
+        if time.monotonic() > deadline:
+            break
+        time.sleep(0.05)
+    return {{"z_m": float(world.object("box").position[2]), "draw": float(rng.normal())}}
+"""
+
+
 def armfleet(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run([*ARMFLEET, *args], capture_output=True, text=True, timeout=120, cwd=cwd)
 
@@ -108,8 +126,11 @@ def test_an_interrupted_sweep_keeps_its_runs_and_resume_runs_only_the_rest(
     tmp_path: Path,
 ) -> None:
     sweep = write_sweep(
-        tmp_path, "task: tasks.py:slow\nrandomize:\n  task.mass_kg: {uniform: [0.1, 0.3]}\n"
+        tmp_path, "task: gated.py:gated\nrandomize:\n  task.mass_kg: {uniform: [0.1, 0.3]}\n"
     )
+    started, gate = tmp_path / "started", tmp_path / "open"
+    started.mkdir()
+    (tmp_path / "gated.py").write_text(GATED_TASK.format(folder=str(started), gate=str(gate)))
     results = tmp_path / "r.parquet"
     runs = 40
     command = [*ARMFLEET, "sweep", str(sweep), "--runs", str(runs), "-o", str(results)]
@@ -140,6 +161,7 @@ def test_an_interrupted_sweep_keeps_its_runs_and_resume_runs_only_the_rest(
     assert 4 <= len(seeds) < runs and len(set(seeds)) == len(seeds)
     assert f"{len(seeds)} of {runs} runs kept" in stderr
 
+    gate.touch()  # the runs left need not wait any more
     resumed = subprocess.run(
         [*command, "--resume", "--quiet"], cwd=tmp_path, capture_output=True, text=True, timeout=180
     )

@@ -116,7 +116,7 @@ def add_to_world(client: Client, spec: FleetSpec, quiet: bool) -> int:
     subscription = client.subscribe(topics.BRINGUP, events.put, queue_size=1000)
     try:
         for arm in spec.arms:
-            client.spawn(arm.name, arm.model, arm.pose)
+            client.spawn(arm.name, arm.model, arm.pose, xacro_args=dict(arm.xacro_args))
             _show_stages(events, arm.name, names, quiet)
             if not quiet:
                 print(f"{arm.name} ready in the world at {client.address}", flush=True)

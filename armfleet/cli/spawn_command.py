@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import argparse
 import re
+from pathlib import Path
 
+from armfleet.checks.model_reference import is_model_file
 from armfleet.checks.names import ARM_NAME_PATTERN, check_arm_name
 from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_connect_arguments
@@ -36,7 +38,12 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     )  # fmt: skip
     parser.add_argument(
         "--model", nargs="+", default=["panda"], metavar="MODEL",
-        help="one model for all arms or one per name (default: panda; see 'armfleet models')",
+        help="one model for all arms or one per name: a shipped model (default: panda; see "
+        "'armfleet models') or your own .urdf/.urdf.xacro file or package:// URI",
+    )  # fmt: skip
+    parser.add_argument(
+        "--xacro-arg", action="append", default=[], metavar="NAME=VALUE", type=_xacro_arg,
+        help="an argument of the model files' xacro (repeatable), e.g. ur_type:=ur5e",
     )  # fmt: skip
     add_run_arguments(parser)
     parser.add_argument(
@@ -49,7 +56,17 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     # Names typed after --at or --model end up there: a value that is not a pose (has an
     # arm name's form) or not a model was meant as a name.
     parser.value_tests["--at"] = ValueTest("position", lambda text: not _is_name(text))
-    parser.value_tests["--model"] = ValueTest("model", lambda text: text in ModelLibrary().names)
+    parser.value_tests["--model"] = ValueTest(
+        "model", lambda text: is_model_file(text) or text in ModelLibrary().names
+    )
+
+
+def _xacro_arg(text: str) -> tuple[str, str]:
+    """``NAME=VALUE`` (or ROS's ``NAME:=VALUE``) as a pair."""
+    name, separator, value = text.replace(":=", "=", 1).partition("=")
+    if not separator or not name.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is not NAME=VALUE (e.g. ur_type=ur5e)")
+    return name.strip(), value
 
 
 def _is_name(text: str) -> bool:
@@ -75,8 +92,16 @@ def spec_from_arguments(args: argparse.Namespace, models: ModelLibrary) -> Fleet
     available = models.names
     chosen = args.model * len(names) if len(args.model) == 1 else args.model
     arms: list[ArmSpec] = []
+    xacro_args = tuple(sorted(dict(getattr(args, "xacro_arg", [])).items()))
+    if xacro_args and not any(is_model_file(model) for model in chosen):
+        raise UsageError("--xacro-arg applies to a model file (--model PATH); none was given")
     for name, model, at in zip(names, chosen, args.at, strict=True):
         check_arm_name(name, [arm.name for arm in arms])
+        if is_model_file(model):  # read by the world's process: an absolute path
+            if not model.startswith("package://"):
+                model = str(Path(model).expanduser().absolute())
+            arms.append(ArmSpec(name, model, SpawnPose.parse(at), xacro_args=xacro_args))
+            continue
         if model not in available:
             raise UnknownModel(model, available)
         arms.append(ArmSpec(name, model, SpawnPose.parse(at)))

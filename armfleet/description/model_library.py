@@ -1,4 +1,5 @@
-"""The arm models armfleet knows: one ``<model>.urdf.xacro`` per model in ``description/``.
+"""The arm models armfleet knows: one ``<model>.urdf.xacro`` per model in ``description/``,
+and any URDF or xacro file given by path (:mod:`~armfleet.description.file_model`).
 
 The list of models is read from the folder every time, never kept by hand.
 Expanding a model gives the URDF of one arm: every link and joint prefixed,
@@ -10,17 +11,28 @@ from __future__ import annotations
 
 import tempfile
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from xml.dom import minidom
 
 import xacro
 
+from armfleet.checks.model_reference import is_model_file
 from armfleet.description.data_folders import data_dir
+from armfleet.description.file_model import (
+    ModelFile,
+    anatomy,
+    expand_file,
+    locate,
+    wrapper_xacro,
+)
+from armfleet.description.package_finder import PackageFinder
 from armfleet.description.resource_resolver import ResourceResolver
 from armfleet.description.upstream_macro import XACRO_NS, prefixable_macro
 from armfleet.errors import DescriptionError, UnknownModel
 from armfleet.frames.spawn_pose import SpawnPose
+from armfleet.physics.clear_home import clear_home
 from armfleet.physics.contact_pairs import solid_link_pairs, touching_pairs
 from armfleet.physics.lean_urdf import lean_urdf
 
@@ -64,13 +76,23 @@ class ModelLibrary:
     Args:
         folder: folder of ``<model>.urdf.xacro`` files; armfleet's own by default.
         resolver: the URI resolver; a default one if omitted.
+        package_paths: folders searched first for ROS packages (``package://``,
+            ``$(find)``) of model files, as ``--package-path`` gives them.
     """
 
-    def __init__(self, folder: Path | None = None, resolver: ResourceResolver | None = None):
+    def __init__(
+        self,
+        folder: Path | None = None,
+        resolver: ResourceResolver | None = None,
+        package_paths: Sequence[str | Path] = (),
+    ):
         self._folder = folder or data_dir("description")
-        self._resolver = resolver or ResourceResolver()
+        self._resolver = resolver or ResourceResolver(finder=PackageFinder(package_paths))
         self._macros: dict[str, str] = {}
         self._templates: dict[str, _Template] = {}
+        #: Wrappers written for model files, by model key (see :meth:`path`).
+        self._written: dict[str, Path] = {}
+        self._scratch: tempfile.TemporaryDirectory[str] | None = None
 
     @property
     def folder(self) -> Path:
@@ -85,52 +107,94 @@ class ModelLibrary:
         """Model names, sorted, derived from the files in the folder."""
         return sorted(p.name[: -len(XACRO_SUFFIX)] for p in self._folder.glob(f"*{XACRO_SUFFIX}"))
 
-    def path(self, model: str) -> Path:
-        """Path of a model's xacro file; raises :class:`UnknownModel`.
+    @property
+    def finder(self) -> PackageFinder:
+        """Where the ROS packages of model files are found."""
+        return self._resolver.finder
 
-        Only names of files in the folder are accepted: a name can't reach a
-        description elsewhere (descriptions are code; see the README).
+    def path(self, model: str, xacro_args: Mapping[str, str] | None = None) -> Path:
+        """Path of a model's xacro file: a shipped model's, or the wrapper armfleet writes
+        for a model file (a ``.urdf``/``.xacro`` path or a ``package://`` URI).
+
+        Raises:
+            UnknownModel: a name that is no shipped model and no file (the shipped listed).
+            DescriptionError: a model file that cannot be read or expanded (one line).
+            PackageNotFound: a package it names is nowhere (every place searched listed).
         """
+        if isinstance(model, str) and is_model_file(model):
+            return self._wrapper(model, dict(xacro_args or {}))
         names = self.names
         if model not in names:
             raise UnknownModel(model, names)
+        if xacro_args:
+            raise DescriptionError(
+                f"xacro arguments ({', '.join(xacro_args)}) apply to a model file, not to the "
+                f"shipped model {model!r}"
+            )
         return self._folder / f"{model}{XACRO_SUFFIX}"
 
-    def expand(self, model: str, prefix: str, pose: SpawnPose | None = None) -> ArmDescription:
+    def expand(
+        self,
+        model: str,
+        prefix: str,
+        pose: SpawnPose | None = None,
+        xacro_args: Mapping[str, str] | None = None,
+    ) -> ArmDescription:
         """Expand ``model`` for an arm whose names start with ``prefix``, placed at ``pose``.
 
-        xacro runs once per model with placeholder arguments; each arm is then an
-        instance of that text. The first time, a direct expansion with probe
-        arguments must equal the instance, else this model is expanded directly
-        every time (a description that computes with its arguments).
+        ``model`` is a shipped model's name or a model file (``xacro_args`` are its
+        arguments). xacro runs once per model with placeholder arguments; each arm is then
+        an instance of that text. The first time, a direct expansion with probe arguments
+        must equal the instance, else this model is expanded directly every time (a
+        description that computes with its arguments).
         """
         pose = pose or SpawnPose()
-        self.path(model)  # UnknownModel for what names no model, a list included
-        template = self._templates.get(model)
+        path = self.path(model, xacro_args)  # UnknownModel for what names no model
+        key = str(path)
+        template = self._templates.get(key)
         if template is None:
-            template = self._make_template(model)
-            self._templates[model] = template
+            template = self._make_template(path)
+            self._templates[key] = template
         if template.text is None:
-            urdf, _ = self._expand_directly(model, prefix, _pose_arguments(pose))
+            urdf, _ = self._expand_directly(path, prefix, _pose_arguments(pose))
         else:
             urdf = _instantiate(template.text, prefix, pose)
         ignored = tuple((prefix + a, prefix + b) for a, b in template.ignored_contacts)
         return ArmDescription(model, prefix, urdf, template.home, ignored)
 
-    def _make_template(self, model: str) -> _Template:
-        text, properties = self._expand_directly(model, PREFIX_TOKEN, (XYZ_TOKEN, RPY_TOKEN))
-        path = self.path(model)
+    def _wrapper(self, model: str, xacro_args: dict[str, str]) -> Path:
+        """The wrapper written for a model file (once per file and arguments)."""
+        file = ModelFile(locate(model, self.finder), tuple(sorted(xacro_args.items())))
+        written = self._written.get(file.key)
+        if written is not None:
+            return written
+        urdf = expand_file(file, self.finder)
+        found = anatomy(urdf, str(file.path))
+        home = clear_home(self._resolver.resolve_text(urdf), found.arm_joints, found.home)
+        found = replace(found, home=home.positions)
+        if self._scratch is None:
+            self._scratch = tempfile.TemporaryDirectory(prefix="armfleet-models-")
+        folder = Path(self._scratch.name)
+        upstream = folder / f"{file.key}.urdf"
+        upstream.write_text(urdf)
+        wrapper = folder / f"{file.key}{XACRO_SUFFIX}"
+        wrapper.write_text(wrapper_xacro(file.key, upstream, found))
+        self._written[file.key] = wrapper
+        return wrapper
+
+    def _make_template(self, path: Path) -> _Template:
+        text, properties = self._expand_directly(path, PREFIX_TOKEN, (XYZ_TOKEN, RPY_TOKEN))
         home = _parse_home(path, properties.get(HOME_PROPERTY, ""))
         probe_pose = SpawnPose(0.25, -0.5, 0.125, 30.0, roll_deg=5.0)
-        probe, _ = self._expand_directly(model, PROBE_PREFIX, _pose_arguments(probe_pose))
+        probe, _ = self._expand_directly(path, PROBE_PREFIX, _pose_arguments(probe_pose))
         usable = _instantiate(text, PROBE_PREFIX, probe_pose) == probe
         return _Template(text if usable else None, home, _never_touching(probe))
 
     def _expand_directly(
-        self, model: str, prefix: str, pose_arguments: tuple[str, str]
+        self, path: Path, prefix: str, pose_arguments: tuple[str, str]
     ) -> tuple[str, dict[str, str]]:
         """Run xacro; return the URDF (URIs resolved) and the file's top-level properties."""
-        path = self.path(model)
+        model = path.name[: -len(XACRO_SUFFIX)]
         properties = _top_level_properties(path)
         upstream_uri = properties.get(UPSTREAM_PROPERTY)
         if upstream_uri is None:

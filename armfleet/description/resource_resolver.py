@@ -12,12 +12,10 @@ from collections.abc import Sequence
 from importlib import metadata
 from pathlib import Path
 
-from armfleet.errors import ResourceNotFound
+from armfleet.description.package_finder import PACKAGE_PATH_ENV, PackageFinder
+from armfleet.errors import PackageNotFound, ResourceNotFound
 
 _URI = re.compile(r"""(?P<quote>["'])(?P<uri>(?:package|file)://[^"']+)(?P=quote)""")
-
-#: Extra share folders, separated by os.pathsep, searched before the defaults.
-PACKAGE_PATH_ENV = "ARMFLEET_PACKAGE_PATH"
 
 
 def default_share_dirs() -> list[Path]:
@@ -39,16 +37,28 @@ class ResourceResolver:
     """Turns ``package://pkg/rel/path`` and ``file:///abs`` into absolute paths.
 
     Args:
-        share_dirs: folders searched in order; ``package://pkg/x`` resolves to the
-            first ``<dir>/pkg/x`` that exists. Defaults to :func:`default_share_dirs`.
+        share_dirs: if given, the only folders searched, in order: ``package://pkg/x``
+            resolves to the first ``<dir>/pkg/x`` that exists.
+        finder: else, where packages are found (``--package-path``,
+            ``ARMFLEET_PACKAGE_PATH``, ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``,
+            example-robot-data: :mod:`~armfleet.description.package_finder`); a default
+            one if omitted.
     """
 
-    def __init__(self, share_dirs: Sequence[Path] | None = None) -> None:
-        self._share_dirs = tuple(Path(d) for d in (share_dirs or default_share_dirs()))
+    def __init__(
+        self, share_dirs: Sequence[Path] | None = None, finder: PackageFinder | None = None
+    ) -> None:
+        self._share_dirs = tuple(Path(d) for d in share_dirs or ())
+        self._finder = finder or PackageFinder()
+
+    @property
+    def finder(self) -> PackageFinder:
+        return self._finder
 
     @property
     def share_dirs(self) -> tuple[Path, ...]:
-        return self._share_dirs
+        """The folders searched: the ones given, else the finder's places."""
+        return self._share_dirs or tuple(place.folder for place in self._finder.places)
 
     def resolve(self, uri: str) -> Path:
         """Absolute path of an existing file named by ``uri``.
@@ -67,13 +77,22 @@ class ResourceResolver:
                 return path
             raise ResourceNotFound(uri, [])
         relative = uri[len("package://") :]
-        searched = []
-        for share in self._share_dirs:
-            candidate = share / relative
-            searched.append(str(share))
-            if candidate.is_file():
-                return candidate.resolve()
-        raise ResourceNotFound(uri, searched)
+        if self._share_dirs:
+            searched = []
+            for share in self._share_dirs:
+                candidate = share / relative
+                searched.append(str(share))
+                if candidate.is_file():
+                    return candidate.resolve()
+            raise ResourceNotFound(uri, searched)
+        package, _, inside = relative.partition("/")
+        try:
+            candidate = self._finder.find(package) / inside
+        except PackageNotFound as missing:
+            raise ResourceNotFound(uri, missing.searched) from None
+        if candidate.is_file():
+            return candidate.resolve()
+        raise ResourceNotFound(uri, [str(candidate.parent)])
 
     def resolve_text(self, xml_text: str) -> str:
         """Replace every quoted ``package://``/``file://`` URI in ``xml_text``."""

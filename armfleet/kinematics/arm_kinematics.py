@@ -51,7 +51,7 @@ class ArmKinematics:
             raise DescriptionError(f"unsupported continuous/multi-DoF joints: {', '.join(names)}")
         if not self.model.existFrame(tool_frame):
             raise DescriptionError(f"the description has no landmark frame {tool_frame!r}")
-        tool_joint = self.model.frames[self.model.getFrameId(tool_frame)].parentJoint
+        tool_joint = self.model.frames[body_frame_id(self.model, tool_frame)].parentJoint
         chain = {j for j in self.model.supports[tool_joint] if j != 0}
         #: Names of all movable joints, in model (configuration) order.
         self.joint_names: tuple[str, ...] = tuple(self.model.names[1:])
@@ -68,7 +68,13 @@ class ArmKinematics:
         self.effort_limit = np.array(self.model.effortLimit, dtype=float)
         self.damping = np.array(self.model.damping, dtype=float)
         self._damping_torque = np.zeros(self.model.nv)
+        # A link and a joint may share a name (SO-100's "gripper"): the name is the link's.
         self._frame_ids = {frame.name: i for i, frame in enumerate(self.model.frames)}
+        self._frame_ids |= {
+            frame.name: i
+            for i, frame in enumerate(self.model.frames)
+            if frame.type == pin.FrameType.BODY
+        }
         self._fk_q: FloatArray | None = None
 
     @property
@@ -133,3 +139,10 @@ class ArmKinematics:
         np.multiply(self.damping, v, out=self._damping_torque)
         tau += self._damping_torque
         return tau
+
+
+def body_frame_id(model: pin.Model, name: str) -> int:
+    """The frame ``name``, its link's if a joint has the same name."""
+    if model.existFrame(name, pin.FrameType.BODY):
+        return int(model.getFrameId(name, pin.FrameType.BODY))
+    return int(model.getFrameId(name))

@@ -36,6 +36,7 @@ from armfleet.checks.number_ranges import WORLD_COORDINATE_M
 from armfleet.checks.real_numbers import all_real
 from armfleet.errors import TargetPoseError, UnknownFrame
 from armfleet.kinematics import ArmKinematics
+from armfleet.kinematics.arm_kinematics import body_frame_id
 from armfleet.messages import FloatArray
 
 #: Orthonormality and last-row tolerance of a 4x4 pose given by a user.
@@ -166,7 +167,7 @@ class InverseKinematics:
 
     def frame_pose(self, frame: str, q: FloatArray) -> pin.SE3:
         """World pose of ``frame`` at configuration ``q`` (every movable joint)."""
-        frame_id = self._model.getFrameId(frame)
+        frame_id = body_frame_id(self._model, frame)
         pin.framesForwardKinematics(self._model, self._data, q)
         return pin.SE3(self._data.oMf[frame_id])
 
@@ -182,7 +183,7 @@ class InverseKinematics:
                 and the fixed value of the others.
             restarts: try random configurations if the seeded attempt fails.
         """
-        frame_id = self._model.getFrameId(frame)
+        frame_id = body_frame_id(self._model, frame)
         best = self._attempt(frame_id, target, np.array(seed, dtype=float))
         iterations, tries = best[4], 0
         generator = np.random.default_rng(0)

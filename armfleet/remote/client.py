@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import zmq
 
 from armfleet.checks import number_ranges
+from armfleet.checks.model_reference import is_model_file
 from armfleet.checks.network_address import normalize_address
 from armfleet.errors import ArmfleetError
 from armfleet.frames.spawn_pose import SpawnPose
@@ -123,19 +125,27 @@ class Client:
         *,
         initial_positions: Positions | None = None,
         parameters: Mapping[str, Mapping[str, float]] | None = None,
+        xacro_args: Mapping[str, str] | None = None,
         timeout: float = SPAWN_TIMEOUT_S,
     ) -> RemoteArm:
         """Bring an arm up in the world (after any bring-up already queued) and return it.
 
         Args:
             name: arm name (``^[a-z][a-z0-9_]*$``), unique in the world.
-            model: one of the world's models (``armfleet models``).
+            model: one of the world's models (``armfleet models``), or a model file: the
+                world's process reads it, so a relative path is made absolute here and
+                must name a file that process can read.
             at: ``(x, y[, z[, yaw_deg]])`` [m, deg], a :class:`SpawnPose`, or ``"X,Y"``.
             initial_positions: arm joint positions at spawn [rad]; the model's home if None.
             parameters: per-controller parameter overrides for this arm.
+            xacro_args: arguments of a xacro model file.
             timeout: wait for the arm to be ready [s].
         """
+        if isinstance(model, str) and is_model_file(model) and not model.startswith("package:"):
+            model = str(Path(model).expanduser().absolute())
         args: dict[str, Any] = {"name": name, "model": model, "at": _pose(at)}
+        if xacro_args:
+            args["xacro_args"] = {str(k): str(v) for k, v in xacro_args.items()}
         if initial_positions is not None:
             args["initial_positions"] = [float(v) for v in initial_positions]
         if parameters:

@@ -20,7 +20,7 @@ from armfleet.messages import ArmMode, JointCommand
 from armfleet.runtime.bus import Subscription
 from armfleet.services.arguments import Arguments
 from armfleet.services.codec import to_wire
-from armfleet.services.errors import UnknownService, UnknownTopic
+from armfleet.services.errors import ProtocolError, UnknownService, UnknownTopic
 from armfleet.services.manipulation_services import ManipulationServices, describe_gripper
 from armfleet.services.object_services import ObjectServices
 from armfleet.services.planning_options import PLANNING_FIELDS, PlanningOptions
@@ -162,13 +162,20 @@ class WorldServices:
 
     # -- arms -------------------------------------------------------------------------
     def prepare_spawn(self, args: Arguments) -> Work:
+        """A model file is read by this process, the world's: its path must be one this
+        process can read (the client makes a relative path absolute on its side)."""
         initial = args.vector("initial_positions", None)
+        given = args.mapping("xacro_args", {})
+        for key, value in given.items():
+            if not isinstance(key, str) or not isinstance(value, str):
+                raise ProtocolError("spawn: 'xacro_args' maps argument names to text values")
         spec = ArmSpec(
             args.text("name"),
             args.text("model", "panda"),
             _pose(args),
             None if initial is None else tuple(initial),
             _controllers(args),
+            tuple(sorted(given.items())),
         )
         world = self._world
 

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 from armfleet.checks.located_yaml import LocatedDict
+from armfleet.checks.model_reference import is_model_file
 from armfleet.checks.names import check_arm_name
 from armfleet.controllers.parameters import load_parameters
 from armfleet.controllers.position_controller import check_target
@@ -46,14 +47,20 @@ def check_fleet(
             fail("name", str(exc))
         if arm.name in seen:
             fail("name", f"arm name {arm.name!r} is used twice; names must be unique")
-        if arm.model not in available:
+        if is_model_file(arm.model):
+            try:
+                models.path(arm.model, dict(arm.xacro_args))  # read and expanded once here
+            except ArmfleetError as exc:
+                fail("model", str(exc))
+        elif arm.model not in available:
             fail("model", f"model {arm.model!r} not found; available: {', '.join(available)}")
         seen[arm.name] = arm
         if arm.initial_positions is not None:
-            if arm.model not in limits:
-                description = models.expand(arm.model, "")
-                limits[arm.model] = ArmKinematics(description.urdf, description.tool0)
-            kinematics = limits[arm.model]
+            key = f"{arm.model} {arm.xacro_args}"
+            if key not in limits:
+                description = models.expand(arm.model, "", xacro_args=dict(arm.xacro_args))
+                limits[key] = ArmKinematics(description.urdf, description.tool0)
+            kinematics = limits[key]
             chain = kinematics.arm_indices
             try:
                 check_target(

@@ -29,10 +29,12 @@ class ArmSpec:
 
     Attributes:
         name: arm name, namespace and prefix.
-        model: one of the models in ``description/``.
+        model: one of the models in ``description/``, or a model file (an absolute path
+            or a ``package://`` URI; see :mod:`armfleet.description.file_model`).
         pose: spawn pose of ``<name>_base_link``.
         initial_positions: arm joint positions at spawn [rad or m]; the model's home if None.
         controllers: per controller type (``position_controller``, ...), its configuration.
+        xacro_args: ``(name, value)`` arguments of a xacro model file.
     """
 
     name: str
@@ -40,6 +42,7 @@ class ArmSpec:
     pose: SpawnPose = field(default_factory=SpawnPose)
     initial_positions: tuple[float, ...] | None = None
     controllers: Mapping[str, ControllerConfig] = field(default_factory=dict)
+    xacro_args: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)

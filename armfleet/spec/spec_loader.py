@@ -50,6 +50,8 @@ from armfleet.spec.spec_reader import SpecReader
 TOP_KEYS = ("world", "arms", "grid", "objects", "sweep")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
 ORIENTATION_KEYS = ("yaw_deg", "yaw_rad", "rpy_deg", "rpy_rad")
+#: Keys of a ``model:`` that names a file.
+MODEL_FILE_KEYS = ("file", "xacro_args")
 ARM_KEYS = ("name", "model", "at_m", "initial_positions", "controllers", *ORIENTATION_KEYS)
 GRID_KEYS = ("rows", "columns", "spacing_m", "model", "origin_m", "controllers", "yaw_deg")
 CONTROLLER_KEYS = ("file", "parameters")
@@ -146,14 +148,45 @@ def _world(reader: SpecReader, top: LocatedDict) -> WorldSpec:
 def _arm(reader: SpecReader, entry: LocatedDict, field: str, base_dir: Path | None) -> ArmSpec:
     reader.only_keys(entry, field, ARM_KEYS)
     name = reader.text(entry, "name", field)
-    model = reader.text(entry, "model", field)
+    model, xacro_args = _model(reader, entry, field, base_dir)
     at = reader.numbers(entry, "at_m", field, (2, 3), "m") if "at_m" in entry else (0.0, 0.0)
     roll, pitch, yaw = _orientation(reader, entry, field)
     initial = None
     if "initial_positions" in entry:
         initial = reader.numbers(entry, "initial_positions", field, range(1, 64), "rad or m")
     pose = SpawnPose(*at, yaw_deg=yaw, roll_deg=roll, pitch_deg=pitch)  # type: ignore[misc]
-    return ArmSpec(name, model, pose, initial, _controllers(reader, entry, field, base_dir))
+    controllers = _controllers(reader, entry, field, base_dir)
+    return ArmSpec(name, model, pose, initial, controllers, xacro_args)
+
+
+def _model(
+    reader: SpecReader, entry: LocatedDict, field: str, base_dir: Path | None
+) -> tuple[str, tuple[tuple[str, str], ...]]:
+    """``model: panda`` (a shipped model), or ``model: {file: arm.urdf.xacro, xacro_args:
+    {...}}`` (a file relative to the spec, or a ``package://`` URI)."""
+    if "model" not in entry or not isinstance(entry["model"], LocatedDict):
+        return reader.text(entry, "model", field), ()
+    where = f"{field}.model"
+    given = reader.mapping(entry["model"], where, entry.line_of("model"))
+    reader.only_keys(given, where, MODEL_FILE_KEYS)
+    file = reader.text(given, "file", where)
+    if not file.startswith("package://"):
+        path = Path(file).expanduser()
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        file = str(path.absolute())
+    arguments: list[tuple[str, str]] = []
+    if "xacro_args" in given:
+        values = reader.mapping(given["xacro_args"], f"{where}.xacro_args", given.line)
+        for key in values:
+            value = values[key]
+            if not isinstance(value, (str, int, float, bool)):
+                raise reader.error(
+                    values.line_of(key), f"{where}.xacro_args.{key}", "expected text or a number"
+                )
+            text = str(value).lower() if isinstance(value, bool) else str(value)
+            arguments.append((str(key), text))
+    return file, tuple(sorted(arguments))
 
 
 def _orientation(reader: SpecReader, entry: LocatedDict, field: str) -> tuple[float, float, float]:

@@ -388,6 +388,7 @@ class World:
         initial_positions: Positions | None = None,
         parameters: ControllerOverrides | None = None,
         parameter_files: Mapping[str, str | Path] | None = None,
+        xacro_args: Mapping[str, str] | None = None,
     ) -> Arm:
         """Bring an arm up, stage by stage, and return it once ready.
 
@@ -397,13 +398,17 @@ class World:
 
         Args:
             name: arm name (``^[a-z][a-z0-9_]*$``), its namespace and prefix.
-            model: one of :attr:`models` ``.names``.
+            model: one of :attr:`models` ``.names``, or a robot description of your own: a
+                ``.urdf`` or ``.urdf.xacro`` file (relative to the working folder) or a
+                ``package://pkg/path`` URI, prefixed and placed for you
+                (:mod:`armfleet.description.file_model`; docs/own-robot.md).
             at: ``(x, y[, z[, yaw_deg]])`` of ``<name>_base_link`` [m, deg].
             initial_positions: arm joint positions at spawn; the model's home by default.
             parameters: per-controller parameter overrides for this arm only,
                 e.g. ``{"position_controller": {"kp_s2": 900.0}}``.
             parameter_files: per-controller parameter file for this arm; the
                 shipped ``controllers/<type>.yaml`` by default.
+            xacro_args: arguments of a xacro model file (``{"ur_type": "ur5e"}``).
 
         Raises:
             StartPoseCollision: at its start configuration the arm would touch
@@ -417,7 +422,12 @@ class World:
         self._check_name_free(name, "an object" if name in self._objects else "")
         pose = SpawnPose.from_values(at)
         files = check_controller_parameters(parameters or {}, parameter_files or {})
-        description = self._models.expand(model, f"{name}_", pose)
+        if xacro_args is not None and not isinstance(xacro_args, Mapping):
+            raise ArmfleetError(
+                f"xacro_args takes a mapping {{name: value}}, got {type(xacro_args).__name__}"
+            )
+        arguments = {str(k): str(v) for k, v in (xacro_args or {}).items()}
+        description = self._models.expand(model, f"{name}_", pose, arguments)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(name, kinematics, description.home, initial_positions)
         frames = arm_frames(kinematics)

@@ -1,0 +1,318 @@
+"""A robot of one's own: a URDF or xacro file (or ``package://`` URI), prefixed for you.
+
+The file is expanded as its vendor meant (xacro with its arguments, ``$(find pkg)`` and
+``package://`` resolved by :mod:`~armfleet.description.package_finder`), then armfleet
+writes what the shipped models' wrapper files hold, so the rest of the library treats it
+as one of them: every link and joint prefixed with the arm's name, the description's own
+``world`` link and the joints hanging from it dropped (as are ``<ros2_control>``,
+``<gazebo>`` and ``<transmission>``), a fixed ``world -> <name>_base_link`` joint carrying
+the spawn pose, and the landmark frames ``<name>_base_link`` and ``<name>_tool0``.
+
+What the description does not say is inferred by a stated rule:
+
+- **base_link**: the root link (after ``world`` is dropped) if it is named ``base_link``;
+  else a ``base_link`` frame is added on the root link.
+- **tool0**: the first link named ``tool0``, ``flange`` or ``tool_flange`` (also with a
+  prefix of the file's own, ``ur5e_tool0``), else the end of the longest chain of arm
+  joints from the root (then of all joints), past no gripper joint; a ``tool0`` frame is
+  added there unless it is ``tool0`` itself.
+- **the gripper's joints**: movable joints with a ``<mimic>``, or named like fingers
+  (``finger``, ``gripper``, ``jaw``, ``knuckle``); the arm's joints are the other movable
+  joints from the root to tool0.
+- **home**: every arm joint at zero, clamped into its limits.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import xml.etree.ElementTree as ET
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import xacro
+
+from armfleet.checks.model_reference import DESCRIPTION_SUFFIXES
+from armfleet.description.ament_index import ament_index
+from armfleet.description.package_finder import PackageFinder
+from armfleet.errors import DescriptionError
+
+#: Largest description file read [bytes]: a robot's URDF is kilobytes, a mesh is no URDF.
+MAX_FILE_BYTES = 10_000_000
+SUFFIXES = DESCRIPTION_SUFFIXES
+#: Words in the name of a gripper's joint (with mimic joints: the gripper's joints).
+FINGER_WORDS = ("finger", "gripper", "jaw", "knuckle")
+#: Link names taken for the tool flange, in order.
+TOOL_NAMES = ("tool0", "flange", "tool_flange")
+MOVABLE = ("revolute", "prismatic")
+REFUSED_JOINTS = ("floating", "planar")
+#: Joint types armfleet does not simulate yet, refused in one line.
+UNSUPPORTED_JOINTS = ("continuous",)
+_URI_ATTRIBUTE = re.compile(r'filename="(?P<name>[^"]+)"')
+#: How ament_index_python says a ``$(find pkg)`` found nothing.
+_MISSING_PACKAGE = re.compile(r"package '([^']+)' not found")
+
+
+@dataclass(frozen=True)
+class ModelFile:
+    """A description file and the xacro arguments it is expanded with."""
+
+    path: Path
+    xacro_args: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def key(self) -> str:
+        """A short name of the file and its arguments, for generated file names."""
+        text = f"{self.path}|{self.xacro_args}"
+        stem = re.sub(r"[^A-Za-z0-9_]", "_", self.path.name.split(".")[0])[:40] or "model"
+        return f"{stem}_{hashlib.sha1(text.encode()).hexdigest()[:10]}"
+
+
+def locate(model: str, finder: PackageFinder, base_dir: Path | None = None) -> Path:
+    """The file ``model`` names: a path (relative to ``base_dir``, else the working folder)
+    or ``package://pkg/path``.
+
+    Raises:
+        DescriptionError: it does not exist, is no file, or is not a URDF or xacro file.
+        PackageNotFound: the package of a ``package://`` URI is nowhere.
+    """
+    if model.startswith("package://"):
+        package, _, relative = model[len("package://") :].partition("/")
+        path = finder.find(package) / relative
+    else:
+        path = Path(model).expanduser()
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+    where = "" if str(path.absolute()) == model else f" ({path.absolute()})"
+    if not path.exists():
+        raise DescriptionError(f"model file {model!r} not found{where}")
+    if not path.is_file():
+        raise DescriptionError(f"model file {model!r} is not a file{where}")
+    if not path.name.endswith(SUFFIXES):
+        raise DescriptionError(
+            f"model file {model!r} is neither .urdf nor .urdf.xacro/.xacro; give a robot "
+            "description (shipped models: armfleet models)"
+        )
+    return path.resolve()
+
+
+def expand_file(model: ModelFile, finder: PackageFinder) -> str:
+    """The file's URDF: xacro run with its arguments (URIs still as written, except that
+    plain relative mesh paths are made absolute).
+
+    Raises:
+        DescriptionError: too large, not UTF-8, not XML, an unknown xacro argument, or
+            xacro failed (its message, with the file it names).
+    """
+    path = model.path
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise DescriptionError(
+            f"{path}: {path.stat().st_size} bytes is too large for a robot description "
+            f"(at most {MAX_FILE_BYTES}); is it a mesh?"
+        )
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise DescriptionError(
+            f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})"
+        ) from None
+    if path.name.endswith(".xacro") or model.xacro_args:
+        _check_arguments(path, text, dict(model.xacro_args))
+        with ament_index(finder.packages()):
+            try:
+                document = xacro.process_file(str(path), mappings=dict(model.xacro_args))
+            except Exception as exc:  # xacro raises bare Exceptions and XML errors
+                problem = " ".join(str(exc).split())
+                missing = _MISSING_PACKAGE.search(problem)
+                if missing is not None:  # $(find pkg): every place searched, and the way out
+                    finder.find(missing.group(1))
+                raise DescriptionError(f"{path}: xacro failed: {problem}") from None
+        text = document.toxml()
+    return _absolute_mesh_paths(text, path.parent)
+
+
+def _check_arguments(path: Path, text: str, given: Mapping[str, str]) -> None:
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise DescriptionError(f"{path} is not valid XML: {exc}") from None
+    declared = {
+        element.get("name", "")
+        for element in root.iter()
+        if element.tag in ("{http://www.ros.org/wiki/xacro}arg", "xacro:arg")
+    }
+    unknown = sorted(set(given) - declared)
+    if unknown:
+        raise DescriptionError(
+            f"{path}: unknown xacro argument {', '.join(unknown)}; its arguments: "
+            f"{', '.join(sorted(declared)) or 'none'}"
+        )
+
+
+def _absolute_mesh_paths(urdf: str, folder: Path) -> str:
+    def absolute(match: re.Match[str]) -> str:
+        name = match.group("name")
+        if "://" in name or Path(name).is_absolute():
+            return match.group(0)
+        return f'filename="{(folder / name).resolve()}"'
+
+    return _URI_ATTRIBUTE.sub(absolute, urdf)
+
+
+@dataclass(frozen=True)
+class Anatomy:
+    """What armfleet reads off a description: its root, tool link, arm joints and home."""
+
+    root: str
+    tool: str
+    arm_joints: tuple[str, ...]
+    home: tuple[float, ...]
+
+
+def anatomy(urdf: str, source: str) -> Anatomy:
+    """The root, tool link, arm chain and home of ``urdf`` (see the module docstring).
+
+    Raises:
+        DescriptionError: not a ``<robot>``, a floating or planar joint (or a continuous
+            one), two roots, or no movable joint between the root and the tool.
+    """
+    try:
+        robot = ET.fromstring(urdf)
+    except ET.ParseError as exc:
+        raise DescriptionError(f"{source} is not valid XML: {exc}") from None
+    if robot.tag != "robot":
+        raise DescriptionError(f"{source} has root <{robot.tag}>; a URDF's root is <robot>")
+    joints = {}
+    for joint in robot.findall("joint"):
+        kind = joint.get("type", "")
+        name = joint.get("name", "")
+        if kind in REFUSED_JOINTS:
+            raise DescriptionError(
+                f"{source}: joint {name!r} is {kind}; an arm is fixed to the world (joints: "
+                "revolute, prismatic, fixed)"
+            )
+        if kind in UNSUPPORTED_JOINTS:
+            raise DescriptionError(
+                f"{source}: joint {name!r} is continuous, which armfleet does not simulate "
+                "yet; give it limits (type revolute) to use this description"
+            )
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None:
+            raise DescriptionError(f"{source}: joint {name!r} lacks a parent or child link")
+        joints[child.get("link", "")] = (name, kind, parent.get("link", ""), joint)
+    links = [link.get("name", "") for link in robot.findall("link")]
+    hung_from_world = {c for c, (_, _, p, _) in joints.items() if p == "world"}
+    roots = [
+        name
+        for name in links
+        if name != "world" and (name not in joints or name in hung_from_world)
+    ]
+    if len(roots) != 1:
+        raise DescriptionError(
+            f"{source}: {len(roots)} root links ({', '.join(roots) or 'none'}); an arm's "
+            "links form one tree"
+        )
+    root = roots[0]
+
+    def chain(link: str) -> list[tuple[str, str, ET.Element]]:
+        out = []
+        while link != root and link in joints:
+            name, kind, parent, element = joints[link]
+            out.append((name, kind, element))
+            link = parent
+        return out[::-1]
+
+    gripper = {
+        name
+        for name, kind, _, element in joints.values()
+        if kind in MOVABLE and (element.find("mimic") is not None or _named_like_finger(name))
+    }
+
+    def reach(link: str) -> tuple[int, int]:
+        """(arm joints, all joints) from the root to ``link``; (-1, -1) past a finger."""
+        joints_above = chain(link)
+        if any(name in gripper for name, _, _ in joints_above):
+            return (-1, -1)
+        return (sum(kind in MOVABLE for _, kind, _ in joints_above), len(joints_above))
+
+    tool = _tool_link(links, root, reach)
+    arm = [
+        (name, element)
+        for name, kind, element in chain(tool)
+        if kind in MOVABLE and name not in gripper
+    ]
+    if not arm:
+        raise DescriptionError(
+            f"{source}: no movable joint between {root} and {tool}; an arm moves"
+        )
+    return Anatomy(root, tool, tuple(n for n, _ in arm), tuple(_zero_within(e) for _, e in arm))
+
+
+def _tool_link(links: list[str], root: str, reach: Callable[[str], tuple[int, int]]) -> str:
+    for wanted in TOOL_NAMES:
+        for name in links:
+            if name == wanted or name.endswith("_" + wanted):
+                return name
+    # The end of the longest chain of arm joints, then of all joints (the first on a tie).
+    candidates = [name for name in links if name not in ("world", root)]
+    return max(candidates, key=reach, default=root)
+
+
+def _named_like_finger(joint: str) -> bool:
+    return any(word in joint.lower() for word in FINGER_WORDS)
+
+
+def _zero_within(joint: ET.Element) -> float:
+    limit = joint.find("limit")
+    if limit is None:
+        return 0.0
+    lower = float(limit.get("lower", "0") or 0)
+    upper = float(limit.get("upper", "0") or 0)
+    return min(max(0.0, lower), upper) if lower <= upper else 0.0
+
+
+def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
+    """The wrapper armfleet writes for a description file (as ``description/`` holds for
+    the shipped models): the world anchor, base_link and tool0 around the prefixed file."""
+    home = " ".join(repr(value) for value in found.home)
+    base = (
+        ""
+        if found.root == "base_link"
+        else f"""
+  <link name="${{prefix}}base_link"/>
+  <joint name="${{prefix}}base_link_joint" type="fixed">
+    <parent link="${{prefix}}base_link"/>
+    <child link="${{prefix}}{found.root}"/>
+  </joint>"""
+    )
+    tool = (
+        ""
+        if found.tool == "tool0"
+        else f"""
+  <link name="${{prefix}}tool0"/>
+  <joint name="${{prefix}}tool0_joint" type="fixed">
+    <parent link="${{prefix}}{found.tool}"/>
+    <child link="${{prefix}}tool0"/>
+  </joint>"""
+    )
+    return f"""<?xml version="1.0"?>
+<!-- Written by armfleet for {upstream.name}: the arm's own description, prefixed. -->
+<robot name="{name}" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:property name="armfleet_upstream_urdf" value="file://{upstream}"/>
+  <xacro:property name="armfleet_home" value="{home}"/>
+  <xacro:arg name="prefix" default=""/>
+  <xacro:arg name="xyz" default="0 0 0"/>
+  <xacro:arg name="rpy" default="0 0 0"/>
+  <xacro:arg name="upstream_macro" default=""/>
+  <xacro:property name="prefix" value="$(arg prefix)"/>
+  <xacro:include filename="$(arg upstream_macro)"/>
+  <link name="world"/>
+  <joint name="${{prefix}}world_joint" type="fixed">
+    <parent link="world"/>
+    <child link="${{prefix}}base_link"/>
+    <origin xyz="$(arg xyz)" rpy="$(arg rpy)"/>
+  </joint>{base}
+  <xacro:upstream prefix="${{prefix}}"/>{tool}
+</robot>
+"""
