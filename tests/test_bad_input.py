@@ -24,6 +24,7 @@ from armfleet.checks.names import ARM_NAME_PATTERN
 from armfleet.controllers import PositionController
 from armfleet.errors import (
     ArmfleetError,
+    DescriptionError,
     DuplicateArmName,
     InvalidArmName,
     JointLimitError,
@@ -166,6 +167,19 @@ def name_error(name: str, label: str):  # -> a pytest.param
     )
 
 
+def missing_model_file(model: str, label: str):  # -> a pytest.param
+    """A path (or a description file's name) is a model file of one's own: one that is not
+    there is refused as such, naming it (docs/own-robot.md)."""
+    return pytest.param(
+        BadInput(
+            spawn_toby(model=model),
+            DescriptionError,
+            lambda w, b: [f"model file {model!r} not found"],
+        ),
+        id=f"unknown-model-{label}",
+    )
+
+
 def model_error(model: str, label: str):  # -> a pytest.param
     return pytest.param(
         BadInput(
@@ -189,8 +203,8 @@ ACCELERATION_BOUNDS = f"outside [{ACCELERATION.lower:g}, {ACCELERATION.upper:g}]
 SPAWN_CASES = [
     model_error("pand", "typo"),
     model_error("Panda", "uppercase"),
-    model_error("panda.urdf.xacro", "file-name"),
-    model_error("../description/panda", "path"),
+    missing_model_file("panda.urdf.xacro", "file-name"),
+    missing_model_file("../description/panda", "path"),
     model_error("", "empty"),
     pytest.param(
         BadInput(spawn_toby(name="bob"), DuplicateArmName, lambda w, b: ["'bob'", "arms: bob"]),

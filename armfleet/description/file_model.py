@@ -86,7 +86,10 @@ def locate(model: str, finder: PackageFinder, base_dir: Path | None = None) -> P
             path = base_dir / path
     where = "" if str(path.absolute()) == model else f" ({path.absolute()})"
     if not path.exists():
-        raise DescriptionError(f"model file {model!r} not found{where}")
+        raise DescriptionError(
+            f"model file {model!r} not found{where}; give an existing .urdf or .urdf.xacro, "
+            "or a shipped model (armfleet models)"
+        )
     if not path.is_file():
         raise DescriptionError(f"model file {model!r} is not a file{where}")
     if not path.name.endswith(SUFFIXES):
