@@ -312,3 +312,28 @@ def test_the_cli_spawns_a_file_with_xacro_arguments_and_a_package_path(
     assert refused.returncode == 2
     lines = refused.stderr.strip().splitlines()
     assert len(lines) == 1 and "my_parts" in lines[0] and "--package-path" in lines[0], lines
+
+
+def test_a_vendor_arm_plans_around_a_box_in_its_way_without_touching_it() -> None:
+    """The planner takes a file's arm as a shipped one: with a box where its tool would pass
+    halfway through a straight swing, a planned move arrives and touches nothing."""
+    with armfleet.World() as world:
+        bob = world.spawn("bob", model=str(UPSTREAM["ur5"]), at=(0, 0))
+        start = np.asarray(bob.positions)
+        goal = start.copy()
+        goal[0] += 1.6  # swing the shoulder
+        tool = world.tf.lookup("world", "bob_tool0")[:3, 3]
+        half = 0.8
+        turn = np.array(
+            [[np.cos(half), -np.sin(half), 0], [np.sin(half), np.cos(half), 0], [0, 0, 1]]
+        )
+        midway = turn @ tool  # where the tool passes halfway through the straight swing
+        world.add_object("box", "box", size=(0.12, 0.12, 0.12), mass=0.0, at=tuple(midway))
+        contacts_before = world.contacts.total_contacts
+        bob.move_to(goal, avoid_collisions=True, timeout_s=10.0)
+        while bob.is_moving:
+            world.run(0.05)
+        world.run(0.2)
+        assert np.abs(bob.positions - goal).max() < TRACKING_RAD
+        assert bob.mode is armfleet.ArmMode.HOLDING
+        assert world.contacts.total_contacts == contacts_before

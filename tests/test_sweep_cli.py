@@ -151,6 +151,7 @@ def test_an_interrupted_sweep_keeps_its_runs_and_resume_runs_only_the_rest(
                 pass
         time.sleep(0.2)
     process.send_signal(signal.SIGINT)  # Ctrl-C
+    gate.touch()  # the runs in flight finish, as a slow run would, and the sweep stops
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 130, stderr
     assert "add --resume to run the rest" in stderr and "Traceback" not in stderr
@@ -161,7 +162,6 @@ def test_an_interrupted_sweep_keeps_its_runs_and_resume_runs_only_the_rest(
     assert 4 <= len(seeds) < runs and len(set(seeds)) == len(seeds)
     assert f"{len(seeds)} of {runs} runs kept" in stderr
 
-    gate.touch()  # the runs left need not wait any more
     resumed = subprocess.run(
         [*command, "--resume", "--quiet"], cwd=tmp_path, capture_output=True, text=True, timeout=180
     )
