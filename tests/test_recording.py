@@ -323,6 +323,8 @@ def test_an_interrupt_while_writing_waits_for_the_write() -> None:
     run tests elsewhere, and Python's signal handlers run in the main thread only)."""
     code = (
         "import signal\n"
+        # As in a terminal, whatever this test's own parent ignores (a job started with &).
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "from armfleet.recording.interrupts import deferred_interrupts\n"
         "order = []\n"
         "try:\n"

@@ -54,6 +54,10 @@ def gated(world, rng, *, mass_kg=0.2):
 """
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def armfleet(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run([*ARMFLEET, *args], capture_output=True, text=True, timeout=120, cwd=cwd)
 
@@ -140,6 +144,9 @@ def test_an_interrupted_sweep_keeps_its_runs_and_resume_runs_only_the_rest(
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # Ctrl-C reaches it as in a terminal, even where this test's parent ignores SIGINT
+        # (a CI job started in the background with &, which Python children inherit).
+        preexec_fn=_default_sigint,
     )
     deadline = time.monotonic() + 90
     while time.monotonic() < deadline:  # wait for a few rows in the journal
