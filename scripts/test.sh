@@ -31,5 +31,5 @@ echo "== mypy"
 .venv/bin/mypy
 echo "== import-linter (the rooms' layers, no import circles, a core free of the extras)"
 .venv/bin/lint-imports
-echo "== pytest (three workers on two cores: tests also wait on worlds, pages and servers)"
-.venv/bin/pytest -n 3 --durations=30 "$@"
+echo "== pytest (three workers on two cores, a file per worker: tests also wait on worlds, pages and servers)"
+.venv/bin/pytest -n 3 --dist loadfile --durations=30 "$@"

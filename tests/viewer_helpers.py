@@ -114,6 +114,12 @@ def line_vertices(command: dict[str, Any]) -> np.ndarray:
     return np.frombuffer(bytes(data), dtype=np.float32).reshape(-1, geometry["itemSize"])
 
 
+#: The longest a test waits for the viewer's messages to show an expected scene [s]: a cap
+#: on an event, reached only when something is wrong (two cores shared by three pytest
+#: workers made 10 s too short once).
+EVENT_CAP_S = 60.0
+
+
 @dataclass
 class SceneState:
     """What a browser would show, rebuilt from the MeshCat commands it received."""
@@ -161,7 +167,7 @@ class SceneWatcher:
 
     def __enter__(self) -> SceneWatcher:
         self._thread.start()
-        if not self._connected.wait(10.0):
+        if not self._connected.wait(EVENT_CAP_S):
             raise RuntimeError(f"no websocket connection: {self._error}")
         return self
 
@@ -209,7 +215,9 @@ class SceneWatcher:
             time.sleep(0.05)
         raise AssertionError(f"the viewer kept sending for {timeout_s} s")
 
-    def wait_for(self, predicate: Callable[[SceneState], bool], timeout_s: float = 10.0) -> None:
+    def wait_for(
+        self, predicate: Callable[[SceneState], bool], timeout_s: float = EVENT_CAP_S
+    ) -> None:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             with self._lock:
