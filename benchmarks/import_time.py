@@ -29,13 +29,27 @@ IMPORT = (
 CLI = "import sys; from armfleet.cli.main import main; sys.argv=['armfleet', '--version']; main()"
 
 
+#: An editable install's import hook outranks PYTHONPATH: without it, the tree given is the
+#: one imported.
+WITHOUT_EDITABLE_HOOK = (
+    "import sys; sys.meta_path[:] = [f for f in sys.meta_path "
+    "if not type(f).__module__.startswith('_editable_skbc_')]; "
+)
+
+
 def _run(code: str, tree: Path | None) -> tuple[float, str]:
     env = dict(os.environ)
-    if tree is not None:  # the other checkout's package first on the path
+    if tree is not None:  # that checkout's package first on the path, and the one imported
         env["PYTHONPATH"] = str(tree)
+        code = WITHOUT_EDITABLE_HOOK + code
     started = time.perf_counter()
-    result = subprocess.run(
-        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False
+    result = subprocess.run(  # run in the tree: -c puts the working folder first on the path
+        [sys.executable, "-c", code],
+        env=env,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+        check=False,
     )
     elapsed = time.perf_counter() - started
     if result.returncode not in (0,) and "armfleet" not in result.stdout:
