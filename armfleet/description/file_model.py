@@ -279,26 +279,8 @@ def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
     """The wrapper armfleet writes for a description file (as ``description/`` holds for
     the shipped models): the world anchor, base_link and tool0 around the prefixed file."""
     home = " ".join(repr(value) for value in found.home)
-    base = (
-        ""
-        if found.root == "base_link"
-        else f"""
-  <link name="${{prefix}}base_link"/>
-  <joint name="${{prefix}}base_link_joint" type="fixed">
-    <parent link="${{prefix}}base_link"/>
-    <child link="${{prefix}}{found.root}"/>
-  </joint>"""
-    )
-    tool = (
-        ""
-        if found.tool == "tool0"
-        else f"""
-  <link name="${{prefix}}tool0"/>
-  <joint name="${{prefix}}tool0_joint" type="fixed">
-    <parent link="${{prefix}}{found.tool}"/>
-    <child link="${{prefix}}tool0"/>
-  </joint>"""
-    )
+    base = "" if found.root == "base_link" else _landmark("base_link", "base_link", found.root)
+    tool = "" if found.tool == "tool0" else _landmark("tool0", found.tool, "tool0")
     return f"""<?xml version="1.0"?>
 <!-- Written by armfleet for {upstream.name}: the arm's own description, prefixed. -->
 <robot name="{name}" xmlns:xacro="http://www.ros.org/wiki/xacro">
@@ -319,3 +301,13 @@ def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
   <xacro:upstream prefix="${{prefix}}"/>{tool}
 </robot>
 """
+
+
+def _landmark(frame: str, parent: str, child: str) -> str:
+    """The landmark link ``frame`` and the fixed joint joining ``parent`` to ``child``."""
+    return f"""
+  <link name="${{prefix}}{frame}"/>
+  <joint name="${{prefix}}{frame}_joint" type="fixed">
+    <parent link="${{prefix}}{parent}"/>
+    <child link="${{prefix}}{child}"/>
+  </joint>"""
