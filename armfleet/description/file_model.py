@@ -171,6 +171,8 @@ class Anatomy:
     tool: str
     arm_joints: tuple[str, ...]
     home: tuple[float, ...]
+    #: The gripper's movable joints (mimic joints and finger-named ones), file order.
+    gripper_joints: tuple[str, ...] = ()
 
 
 def anatomy(urdf: str, source: str) -> Anatomy:
@@ -249,7 +251,13 @@ def anatomy(urdf: str, source: str) -> Anatomy:
         raise DescriptionError(
             f"{source}: no movable joint between {root} and {tool}; an arm moves"
         )
-    return Anatomy(root, tool, tuple(n for n, _ in arm), tuple(_zero_within(e) for _, e in arm))
+    return Anatomy(
+        root,
+        tool,
+        tuple(n for n, _ in arm),
+        tuple(_zero_within(e) for _, e in arm),
+        tuple(j.get("name", "") for j in robot.findall("joint") if j.get("name") in gripper),
+    )
 
 
 def _tool_link(links: list[str], root: str, reach: Callable[[str], tuple[int, int]]) -> str:
@@ -279,6 +287,7 @@ def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
     """The wrapper armfleet writes for a description file (as ``description/`` holds for
     the shipped models): the world anchor, base_link and tool0 around the prefixed file."""
     home = " ".join(repr(value) for value in found.home)
+    gripper = " ".join(found.gripper_joints)
     base = "" if found.root == "base_link" else _landmark("base_link", "base_link", found.root)
     tool = "" if found.tool == "tool0" else _landmark("tool0", found.tool, "tool0")
     return f"""<?xml version="1.0"?>
@@ -286,6 +295,7 @@ def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
 <robot name="{name}" xmlns:xacro="http://www.ros.org/wiki/xacro">
   <xacro:property name="armfleet_upstream_urdf" value="file://{upstream}"/>
   <xacro:property name="armfleet_home" value="{home}"/>
+  <xacro:property name="armfleet_gripper_joints" value="{gripper}"/>
   <xacro:arg name="prefix" default=""/>
   <xacro:arg name="xyz" default="0 0 0"/>
   <xacro:arg name="rpy" default="0 0 0"/>

@@ -39,6 +39,9 @@ from armfleet.physics.lean_urdf import lean_urdf
 XACRO_SUFFIX = ".urdf.xacro"
 UPSTREAM_PROPERTY = "armfleet_upstream_urdf"
 HOME_PROPERTY = "armfleet_home"
+#: Unprefixed names of the gripper's joints, space-separated; absent: inferred at run time
+#: (the shipped models: their prismatic joints off the arm chain).
+GRIPPER_PROPERTY = "armfleet_gripper_joints"
 
 
 @dataclass(frozen=True)
@@ -53,6 +56,9 @@ class ArmDescription:
         ignored_contacts: link pairs whose contacts don't count: pairs of links with
             a collision shape never seen touching in random configurations
             (:mod:`armfleet.physics.contact_pairs`).
+        gripper_joints: prefixed names of the gripper's joints, as the model file's
+            anatomy found them (or as given); empty: the gripper controller infers them
+            (the shipped models: prismatic joints off the base-tool chain).
     """
 
     model: str
@@ -60,6 +66,7 @@ class ArmDescription:
     urdf: str
     home: tuple[float, ...]
     ignored_contacts: tuple[tuple[str, str], ...] = ()
+    gripper_joints: tuple[str, ...] = ()
 
     @property
     def base_link(self) -> str:
@@ -160,7 +167,8 @@ class ModelLibrary:
         else:
             urdf = _instantiate(template.text, prefix, pose)
         ignored = tuple((prefix + a, prefix + b) for a, b in template.ignored_contacts)
-        return ArmDescription(model, prefix, urdf, template.home, ignored)
+        gripper = tuple(prefix + joint for joint in template.gripper_joints)
+        return ArmDescription(model, prefix, urdf, template.home, ignored, gripper)
 
     def _wrapper(self, model: str, xacro_args: dict[str, str]) -> Path:
         """The wrapper written for a model file (once per file and arguments)."""
@@ -188,7 +196,8 @@ class ModelLibrary:
         probe_pose = SpawnPose(0.25, -0.5, 0.125, 30.0, roll_deg=5.0)
         probe, _ = self._expand_directly(path, PROBE_PREFIX, _pose_arguments(probe_pose))
         usable = _instantiate(text, PROBE_PREFIX, probe_pose) == probe
-        return _Template(text if usable else None, home, _never_touching(probe))
+        gripper = tuple(properties.get(GRIPPER_PROPERTY, "").split())
+        return _Template(text if usable else None, home, _never_touching(probe), gripper)
 
     def _expand_directly(
         self, path: Path, prefix: str, pose_arguments: tuple[str, str]
@@ -243,6 +252,7 @@ class _Template:
     text: str | None
     home: tuple[float, ...]
     ignored_contacts: tuple[tuple[str, str], ...]
+    gripper_joints: tuple[str, ...] = ()
 
 
 def _never_touching(probe_urdf: str) -> tuple[tuple[str, str], ...]:
