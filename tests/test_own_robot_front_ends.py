@@ -35,6 +35,13 @@ from tests.viewer_helpers import expected_visual_poses
 #: Poses in the page follow the simulation to this (the viewer's redraw threshold).
 POSE_TOLERANCE = 1e-4
 ARMS = {"bob": "ur5", "toby": "so100"}
+#: Whether the node at a path has reached an x position (its pose's element 12).
+ARRIVED_JS = f"""
+([path, x]) => {{
+  const pose = ({NODE_POSES_JS})([path])[0];
+  return pose !== null && Math.abs(pose[12] - x) < {POSE_TOLERANCE};
+}}
+"""
 
 
 def visual_meshes(urdf: Path) -> int:
@@ -84,14 +91,9 @@ def test_the_browser_draws_every_mesh_of_both_files_where_pinocchio_puts_it(
         bob.move_to(np.asarray(bob.positions) + 0.3)
         own_arms.run(2.0)
         poses = expected_visual_poses(bob)
+        first = sorted(poses)[0]
         page.wait_for_function(
-            """([path, x]) => {
-              const m = (%s)([path])[0];
-              return m !== null && Math.abs(m[12] - x) < %g;
-            }"""
-            % (NODE_POSES_JS, POSE_TOLERANCE),
-            arg=[next(iter(sorted(poses))), float(poses[sorted(poses)[0]][0, 3])],
-            timeout=LOAD_TIMEOUT_MS,
+            ARRIVED_JS, arg=[first, float(poses[first][0, 3])], timeout=LOAD_TIMEOUT_MS
         )
         seen = page.evaluate(NODE_POSES_JS, sorted(poses))
         for path, column_major in zip(sorted(poses), seen, strict=True):
@@ -106,10 +108,9 @@ def test_a_recording_holds_the_prefixed_joints_spawn_transform_and_description(
     tmp_path: Path,
 ) -> None:
     path = tmp_path / "own.mcap"
-    with armfleet.World() as world:
-        with world.record(path):
-            world.spawn("bob", model=str(UPSTREAM["ur5"]), at=(0.5, -0.25, 0.0, 90.0))
-            world.run(0.1)
+    with armfleet.World() as world, world.record(path):
+        world.spawn("bob", model=str(UPSTREAM["ur5"]), at=(0.5, -0.25, 0.0, 90.0))
+        world.run(0.1)
     by_topic: dict[str, list[bytes]] = {}
     with path.open("rb") as stream:  # the official reader, not armfleet's
         for _, channel, message in make_reader(stream).iter_messages():
