@@ -147,6 +147,20 @@ class ResourceNotFound(DescriptionError):
         )
 
 
+class ModelSettingError(DescriptionError):
+    """A setting of a model file (``tool_link``, ``home``, ...) that cannot be read.
+
+    Attributes:
+        source: where the settings came from (a settings file, ``spawn``, a spec field).
+        key: the setting, e.g. ``home`` or ``end_effector.at_link``.
+        problem: what is wrong and what is valid.
+    """
+
+    def __init__(self, source: str, key: str, problem: str) -> None:
+        self.source, self.key, self.problem = source, key, problem
+        super().__init__(f"{source}: {key}: {problem}")
+
+
 class ParameterError(ArmfleetError):
     """A controller parameter file or override that does not fit its schema."""
 

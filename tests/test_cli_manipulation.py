@@ -126,7 +126,7 @@ def test_objects_are_added_listed_and_removed(world: WorldProcess, runtime: Path
 BAD: dict[str, tuple[list[str], str]] = {
     "grip-unknown-arm": (["grip", "zed", "open"], "no arm named 'zed'; arms: bob, toby, ur"),
     "grip-no-gripper": (["grip", "ur", "close"], "ur (ur3) has no gripper"),
-    "grip-bad-action": (["grip", "bob", "wide"], "give open, close or a width in metres"),
+    "grip-bad-action": (["grip", "bob", "wide"], "give open, close or a width (metres"),
     "grip-nan": (
         ["grip", "bob", "nan"],
         "gripper width nan m is invalid; give a value in [0, 0.08]",

@@ -84,7 +84,8 @@ def still_readable(arm: armfleet.Arm, gripper: armfleet.Gripper) -> None:
     assert len(arm.joint_names) == 7 and arm.joint_limits[0].shape == (7,)
     assert repr(arm).startswith("Arm('bob'") and repr(gripper).startswith("Gripper(")
     assert arm.description.model == "panda" and arm.description.prefix == "bob_"
-    assert gripper.max_width > 0.0
+    assert gripper.max_width > 0.0 and gripper.min_width == 0.0
+    assert (gripper.width_unit, gripper.force_unit) == ("m", "N")
 
 
 @pytest.fixture
@@ -282,7 +283,8 @@ def test_the_live_api_clients_handles_say_the_same(served: Served) -> None:  # n
 IDENTITY = {
     armfleet.Arm: {"name", "namespace", "model", "pose", "joint_names", "joint_limits",
                    "has_gripper", "description", "lifetime"},
-    armfleet.Gripper: {"max_width", "max_force", "lifetime"},
+    armfleet.Gripper: {"max_width", "min_width", "width_unit", "max_force", "force_unit",
+                       "lifetime"},
     TfTree: {"lifetime"},
     armfleet.WorldObject: {"name", "shape", "size", "mass", "is_static", "friction", "color",
                            "mesh", "spec", "removed", "lifetime"},

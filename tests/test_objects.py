@@ -350,3 +350,16 @@ def test_a_recording_carries_the_objects_frames(world: armfleet.World, tmp_path:
     assert topic == "/tf"
     assert abs(last["z"] - box.position[2]) < 1e-9
     assert abs(last["z"] - (TABLE_TOP_M + 0.025)) < REST_TOLERANCE_M
+
+
+def test_a_body_added_after_an_arm_was_removed_rests_on_the_floor() -> None:
+    """PyBullet gives a removed body's id to the next body, and its pair filters are kept
+    by id: a box taking a removed arm's id fell through the floor, inheriting "no contact
+    with the floor" from the arm's base links."""
+    with armfleet.World() as world:
+        world.spawn("bob", at=(0.0, 0.0))
+        world.spawn("gone", at=(0.0, -1.5))
+        world.remove("gone")
+        world.add_object("crate", "box", size=(0.1, 0.2, 0.05), mass=0.4, at=(0.5, 0.6, 0.2))
+        world.run(1.0)
+        assert world.objects["crate"].position[2] == pytest.approx(0.025, abs=2e-3)

@@ -102,7 +102,13 @@ def test_readme_is_the_short_path() -> None:
     lines = README.read_text().splitlines()
     assert len(lines) <= MAX_README_LINES
     headings = [line for line in lines if line.startswith("## ")]
-    assert headings == ["## Set up", "## Python", "## Command line", "## Documentation"]
+    assert headings == [
+        "## Set up",
+        "## Python",
+        "## Command line",
+        "## Your own robot",
+        "## Documentation",
+    ]
     index = (DOCS / "README.md").read_text()
     for page in PAGES:
         assert (DOCS / page).is_file(), page
@@ -289,3 +295,26 @@ def check_the_cube_was_lifted(last_line: str) -> None:
     # 5 mm: the most a held box may slip in the tcp (tests/test_gripper.py).
     assert abs(z - (0.325 + 0.15)) < 5e-3, z
     assert abs(x - 0.6) < 5e-3 and abs(y - 0.1) < 5e-3, (x, y)  # where set_pose put it
+
+
+def test_the_own_robot_commands_shown_work(tmp_path: Path) -> None:
+    """The 'Your own robot' lines as typed, the spawn for half a simulated second."""
+    lines = code_blocks(README, "text")[3].splitlines()
+    commands = [shlex.split(line) for line in lines]
+    assert [command[:2] for command in commands] == [
+        ["armfleet", "check-model"],
+        ["armfleet", "spawn"],
+    ]
+    env = os.environ | {"XDG_RUNTIME_DIR": str(tmp_path)}
+    checked = subprocess.run(
+        [*ARMFLEET, *commands[0][1:]], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert checked.returncode == 0, checked.stderr
+    spawned = subprocess.run(
+        [*ARMFLEET, *commands[1][1:], "--duration", "0.5", "--no-viewer", "--quiet"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
+    assert spawned.returncode == 0, spawned.stderr

@@ -3,7 +3,9 @@ client against a world running in another process."""
 
 from __future__ import annotations
 
+import re
 import threading
+import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -15,7 +17,8 @@ import armfleet
 from armfleet.errors import NoGripper
 from armfleet.messages import FloatArray, GripperMode, JointState
 from armfleet.remote import Client, RemoteError
-from tests.remote_world import WorldProcess, wait_until
+from tests.remote_world import WorldProcess, cli, wait_until
+from tests.test_own_robot import UPSTREAM
 
 #: Gripper widths are reached within 0.5 mm (the controller's own test: 0.2 mm).
 WIDTH_TOLERANCE_M = 5e-4
@@ -78,6 +81,38 @@ def test_the_gripper_closes_on_nothing_and_reaches_widths(client: Client) -> Non
     assert abs(bob.gripper.width - 0.055) < WIDTH_TOLERANCE_M
     described = client.call("arm", {"name": "bob"})["gripper"]
     assert described["mode"] == "at width" and described["holding"] is False
+
+
+def test_a_revolute_jaw_is_gripped_in_radians_over_the_wire(
+    client: Client, world: WorldProcess
+) -> None:
+    """SO-100 (a vendor file by path): its jaw's range and units reach the client and the
+    CLI, and an angle below zero, valid for this jaw, is accepted and reached."""
+    client.spawn("jaw", model=str(UPSTREAM["so100"]), at=(0.0, -1.2))
+    try:
+        gripper = client.arm("jaw").gripper
+        jaw = ET.parse(UPSTREAM["so100"]).getroot().find("joint[@name='gripper']/limit")
+        assert jaw is not None
+        assert gripper.min_width == pytest.approx(float(jaw.get("lower", "nan")))
+        assert gripper.max_width == pytest.approx(float(jaw.get("upper", "nan")))
+        target = gripper.min_width / 2  # a negative angle
+        assert target < 0.0
+        gripper.move_to(target)
+        reached = gripper.wait()
+        assert reached.mode is GripperMode.AT_WIDTH
+        assert abs(reached.width - target) < REACHED_RAD
+        with pytest.raises(RemoteError, match=r"rad"):
+            gripper.move_to(gripper.max_width + 1.0)
+        gripped = cli(world.runtime_dir, "grip", "jaw", f"{target:.3f}", "--wait")
+        assert gripped.returncode == 0, gripped.stderr
+        shown = re.search(r"width (\S+) rad,", gripped.stdout)
+        assert shown is not None, gripped.stdout
+        assert abs(float(shown.group(1)) - target) < REACHED_RAD
+        listed = cli(world.runtime_dir, "arms").stdout
+        (row,) = [line for line in listed.splitlines() if line.startswith("jaw ")]
+        assert "so100.urdf" in row and " rad at width" in row and "/" not in row.split()[1]
+    finally:
+        client.remove("jaw")
 
 
 def test_a_model_without_fingers_has_no_gripper(client: Client) -> None:

@@ -281,3 +281,24 @@ def test_tracks_at_least_as_well_as_position_control_with_velocity_feed_forward(
     )
     assert theirs > 1e-6, "the peer was measured"
     assert ours <= theirs
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "numpy"])
+def test_a_move_on_ruckigs_case_boundary_is_planned_and_reached(compiled: bool) -> None:
+    """A move from rest of exactly 2 a^3 / j^2 (0.1 rad with the shipped 5 rad/s^2 and
+    50 rad/s^3) lies on the boundary between two of Ruckig's profile cases, where Ruckig
+    0.19 raises instead of planning: every joint of a Panda moved by it gets there."""
+    with armfleet.World(compiled_control=compiled) as world:
+        bob = world.spawn("bob")
+        parameters = bob.position_controller.parameters
+        step = 2 * parameters["max_acceleration_rad_s2"] ** 3 / parameters["max_jerk_rad_s3"] ** 2
+        assert step == pytest.approx(0.1)
+        trajectory = bob.position_controller.trajectory
+        assert trajectory is not None
+        # Ruckig plans from the reference, which the arm follows within its tracking error.
+        arm = bob.kinematics.arm_indices
+        target = trajectory.position[arm] + step
+        bob.move_to(target)
+        world.run(3.0)
+        assert not bob.is_moving
+        assert np.abs(np.asarray(bob.positions) - target).max() < 1e-3

@@ -14,7 +14,8 @@ from armfleet.controllers import (
     JointStateBroadcaster,
     PositionController,
 )
-from armfleet.controllers.gripper_controller import GripperController, finger_indices
+from armfleet.controllers.gripper_controller import GripperController
+from armfleet.controllers.gripper_joints import gripper_joints
 from armfleet.controllers.parameters import load_parameters
 from armfleet.controllers.position_controller import check_target
 from armfleet.controllers.registry import CONTROLLER_TYPES
@@ -95,7 +96,7 @@ def start_positions(
     the physics solver at every step.
     """
     lower, upper = kinematics.lower, kinematics.upper
-    start: FloatArray = 0.5 * (lower + upper)
+    start = kinematics.mid_range()
     arm = kinematics.arm_indices
     if len(home) != len(arm):
         raise DescriptionError(f"home pose has {len(home)} values for {len(arm)} arm joints")
@@ -166,12 +167,14 @@ def assemble_arm(
         broadcaster.configure()
         controller.configure()
         gripper = None
-        if finger_indices(kinematics).size:
+        joints = gripper_joints(kinematics, description.urdf, description.gripper_joints)
+        if joints.leaders.size:
             gripper = GripperController(
                 context,
                 parameter_files.get(GripperController.type_name),
                 parameters.get(GripperController.type_name),
                 position_controller=controller,
+                joints=joints,
             )
             manager.load(gripper)
             gripper.configure()

@@ -11,7 +11,11 @@ from armfleet.runtime.lifetime import Lifetime, while_alive
 
 
 class Gripper:
-    """The fingers of one arm, driven by its ``gripper_controller``.
+    """The fingers (or jaws) of one arm, driven by its ``gripper_controller``.
+
+    Widths and forces are in the gripper's own units: for prismatic fingers the opening
+    between the pads [m] and the force [N]; for revolute jaws (SO-100's) the jaw's angle
+    [rad] and its torque [N m] (see :mod:`armfleet.controllers.gripper_controller`).
 
     Commands return at once and go out on ``/<arm>/gripper_controller/commands``;
     step the world to see them carried out. Invalid ones raise
@@ -43,21 +47,24 @@ class Gripper:
 
     @while_alive
     def move_to(self, width: float, *, force: float | None = None) -> None:
-        """Go to the opening ``width`` [m], pushing with at most ``force`` [N] per finger."""
-        valid = f"a width in [0, {self.max_width:g}] m"
+        """Go to the opening ``width`` [m, or rad], pushing with at most ``force`` [N, or
+        N m] per finger."""
+        controller = self._controller
+        unit = controller.width_unit
+        valid = f"a width in [{controller.min_width:g}, {self.max_width:g}] {unit}"
         number = real_number(width, f"{self._arm}: gripper width", valid, finite=False)
         self._send(GripperCommand(number, False, self._force(force)))
 
     @while_alive
     def close(self, force: float | None = None) -> None:
-        """Close until blocked, then press with ``force`` [N] per finger (the
-        ``grasp_force_n`` parameter by default)."""
+        """Close until blocked, then press with ``force`` [N, or N m] per finger (the
+        ``grasp_force_n`` parameter by default; ``grasp_torque_n_m`` for revolute jaws)."""
         self._send(GripperCommand(0.0, True, self._force(force)))
 
     def _force(self, force: float | None) -> float:
         if force is None:
-            return min(float(self._controller.parameters["grasp_force_n"]), self.max_force)
-        valid = f"a force in (0, {self.max_force:g}] N"
+            return min(self._controller.default_force, self.max_force)
+        valid = f"a force in (0, {self.max_force:g}] {self._controller.force_unit}"
         return real_number(force, f"{self._arm}: gripper force", valid, finite=False)
 
     def _send(self, command: GripperCommand) -> None:
@@ -67,23 +74,38 @@ class Gripper:
     @property
     @while_alive
     def width(self) -> float:
-        """Measured opening between the finger pads [m]."""
+        """Measured opening between the finger pads [m] (revolute jaws: angle [rad])."""
         return self._controller.width
 
     @property
     def max_width(self) -> float:
-        """Widest opening [m]."""
+        """Widest opening [m, or rad]."""
         return self._controller.max_width
 
     @property
+    def min_width(self) -> float:
+        """Narrowest opening [m, or rad]: 0 for fingers, the jaw's lower limit for jaws."""
+        return self._controller.min_width
+
+    @property
+    def width_unit(self) -> str:
+        """Unit of widths: ``m`` for prismatic fingers, ``rad`` for revolute jaws."""
+        return self._controller.width_unit
+
+    @property
+    def force_unit(self) -> str:
+        """Unit of forces: ``N`` for prismatic fingers, ``N m`` for revolute jaws."""
+        return self._controller.force_unit
+
+    @property
     def max_force(self) -> float:
-        """Strongest force a finger can press with [N] (its URDF effort limit)."""
+        """Strongest force a finger can press with [N, or N m] (its URDF effort limit)."""
         return self._controller.max_force
 
     @property
     @while_alive
     def force(self) -> float:
-        """Force each finger presses with now [N] (positive closing)."""
+        """Force each finger presses with now [N, or N m] (positive closing)."""
         return self._controller.force
 
     @property

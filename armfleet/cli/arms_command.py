@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import PurePath
 from typing import Any
 
 from armfleet.cli.api_options import add_remote_command, connect_from
@@ -28,14 +29,25 @@ def run(args: argparse.Namespace) -> int:
         q = " ".join(f"{v:+.3f}" for v in arm["positions"])
         mode = arm["mode"] + (f" ({arm['reason']})" if arm["reason"] else "")
         gripper = _gripper(arm.get("gripper"))
-        print(f"{arm['name']:<12} {arm['model']:<8} {mode:<16} {at:<28} {gripper:<24} [{q}]")
+        model = _short_model(arm["model"])
+        print(f"{arm['name']:<12} {model:<8} {mode:<16} {at:<28} {gripper:<24} [{q}]")
     state = "paused" if info.paused else "running"
     print(f"({len(arms)} arm(s); t={info.time_s:.3f}s, {state}, {client.address})")
     return 0
 
 
+def _short_model(model: str) -> str:
+    """A shipped model's name, or a model file's name (its folder is in ``armfleet topic
+    echo /<arm>/robot_description`` and the recording)."""
+    if model.startswith("package://") or "/" in model:
+        return PurePath(model).name
+    return model
+
+
 def _gripper(state: dict[str, Any] | None) -> str:
-    """E.g. ``0.0400 m holding``, ``0.0800 m at width``; ``-`` for an arm without fingers."""
+    """E.g. ``0.0400 m holding``, ``0.9000 rad at width`` (a revolute jaw); ``-`` for an
+    arm without a gripper."""
     if state is None:
         return "-"
-    return f"{state['width']:.4f} m " + ("holding" if state["holding"] else state["mode"])
+    unit = state.get("width_unit", "m")  # worlds before revolute jaws: fingers, metres
+    return f"{state['width']:.4f} {unit} " + ("holding" if state["holding"] else state["mode"])

@@ -17,7 +17,7 @@ from armfleet.cli.listen_ports import check_run_ports
 from armfleet.cli.record_option import RunRecording
 from armfleet.cli.status_line import status_line
 from armfleet.cli.world_loop import run_world
-from armfleet.messages import BringupEvent
+from armfleet.messages import BringupEvent, BringupStage
 
 if TYPE_CHECKING:  # types only; the simulator loads when a world starts
     from armfleet.spec import FleetSpec
@@ -57,7 +57,13 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
                 print(f"armfleet: viewer not started: {world.viewer_error}", file=sys.stderr)
 
         def on_bringup(event: BringupEvent) -> None:
-            say(f"[{event.arm}] {event.stage.value} (t={event.stamp:.3f}s, {event.wall_time:.2f}s)")
+            stamps = f"(t={event.stamp:.3f}s, {event.wall_time:.2f}s)"
+            line = f"[{event.arm}] {event.stage.value} {stamps}"
+            arm = world.arms.get(event.arm)
+            choice = arm.description.home_choice if arm is not None else None
+            if event.stage is BringupStage.SPAWNED and choice is not None:  # a model file's
+                line += f", {choice.clause}"
+            say(line)
 
         world.bus.subscribe(topics.BRINGUP, on_bringup)
 

@@ -18,12 +18,13 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     parser.add_argument("name", metavar="NAME", help="arm name (a model with fingers, e.g. panda)")
     parser.add_argument(
         "action", metavar="open|close|WIDTH_M",
-        help="open fully; close until blocked, then squeeze with --force; or go to a width [m]",
+        help="open fully; close until blocked, then squeeze with --force; or go to a width [m; "
+        "rad for a revolute jaw]",
     )  # fmt: skip
     parser.add_argument(
         "--force", type=float, default=None, metavar="N",
-        help="force limit per finger [N] (the grasp force when closing; default: the arm's "
-        "grasp_force_n)",
+        help="force limit per finger [N; N m for a revolute jaw] (the grasp force when closing; "
+        "default: the arm's grasp force)",
     )  # fmt: skip
     parser.add_argument(
         "--wait", action="store_true",
@@ -44,7 +45,8 @@ def parse_action(text: str) -> float | str:
         width = float(text)
     except ValueError:
         raise UsageError(
-            f"grip action {text!r} is invalid; give open, close or a width in metres (e.g. 0.04)"
+            f"grip action {text!r} is invalid; give open, close or a width (metres, e.g. 0.04; "
+            "radians for a revolute jaw)"
         ) from None
     return width  # nan and out-of-range widths: the world names the valid range
 
@@ -62,13 +64,13 @@ def run(args: argparse.Namespace) -> int:
             state = gripper.move_to(action, force=args.force)
         if args.wait:
             state = gripper.wait(args.wait_timeout)
-    print(f"{args.name}: {describe(state)}")
+    print(f"{args.name}: {describe(state, gripper.width_unit)}")
     return 0
 
 
-def describe(state: GripperState) -> str:
-    """E.g. ``gripper closed, width 0.0000 m, not holding (t=1.234s)``."""
+def describe(state: GripperState, unit: str = "m") -> str:
+    """E.g. ``gripper closed, width 0.0000 m, not holding (t=1.234s)`` (``rad`` for a
+    revolute jaw)."""
     holding = "holding" if state.holding else "not holding"
-    return (
-        f"gripper {state.mode.value}, width {state.width:.4f} m, {holding} (t={state.stamp:.3f}s)"
-    )
+    width = f"{state.width:.4f} {unit}"
+    return f"gripper {state.mode.value}, width {width}, {holding} (t={state.stamp:.3f}s)"

@@ -116,10 +116,15 @@ def add_to_world(client: Client, spec: FleetSpec, quiet: bool) -> int:
     subscription = client.subscribe(topics.BRINGUP, events.put, queue_size=1000)
     try:
         for arm in spec.arms:
-            client.spawn(arm.name, arm.model, arm.pose, xacro_args=dict(arm.xacro_args))
+            client.spawn(arm.name, arm.model, arm.pose, **arm.options.keywords())
             _show_stages(events, arm.name, names, quiet)
             if not quiet:
-                print(f"{arm.name} ready in the world at {client.address}", flush=True)
+                home = client.call("arm", {"name": arm.name}).get("home", "")  # a model file's
+                print(
+                    f"{arm.name} ready in the world at {client.address}"
+                    + (f" ({home})" if home else ""),
+                    flush=True,
+                )
     finally:
         subscription.cancel()
     return 0

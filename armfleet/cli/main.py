@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from armfleet._version import __version__
 from armfleet.cli import (
     arms_command,
+    check_model_command,
     grip_command,
     launch_command,
     models_command,
@@ -44,6 +45,7 @@ def build_parser() -> OneLineParser:
     for command in ("spawn", "launch"):
         add_api_arguments(subparsers.choices[command])
     models_command.add_parser(subparsers)
+    check_model_command.add_parser(subparsers)
     arms_command.add_parser(subparsers)
     move_command.add_parser(subparsers)
     move_together_command.add_parser(subparsers)

@@ -17,6 +17,7 @@ from armfleet.cli.misplaced_values import ValueTest
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.run_options import add_run_arguments, check_run_arguments
 from armfleet.description import ModelLibrary
+from armfleet.description.model_options import options_from_keywords
 from armfleet.errors import UnknownModel
 from armfleet.frames.spawn_pose import AT_SYNTAX, SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
@@ -39,11 +40,22 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     parser.add_argument(
         "--model", nargs="+", default=["panda"], metavar="MODEL",
         help="one model for all arms or one per name: a shipped model (default: panda; see "
-        "'armfleet models') or your own .urdf/.urdf.xacro file or package:// URI",
+        "'armfleet models'), one of your own models by name, or your own .urdf/.urdf.xacro "
+        "file or package:// URI",
     )  # fmt: skip
     parser.add_argument(
         "--xacro-arg", action="append", default=[], metavar="NAME=VALUE", type=_xacro_arg,
         help="an argument of the model files' xacro (repeatable), e.g. ur_type:=ur5e",
+    )  # fmt: skip
+    parser.add_argument(
+        "--tool-link", metavar="LINK",
+        help="the model file's link tool0 is put on (default: tool0, flange or tool_flange, "
+        "else the end of the longest chain)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--end-effector", metavar="FILE",
+        help="a gripper's .urdf/.urdf.xacro attached at the model file's tool link; its "
+        "movable joints are the gripper's (home:, gripper_joints:, at_link: in a spec)",
     )  # fmt: skip
     add_run_arguments(parser)
     parser.add_argument(
@@ -57,8 +69,12 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
     # arm name's form) or not a model was meant as a name.
     parser.value_tests["--at"] = ValueTest("position", lambda text: not _is_name(text))
     parser.value_tests["--model"] = ValueTest(
-        "model", lambda text: is_model_file(text) or text in ModelLibrary().names
+        "model", lambda text: is_model_file(text) or text in ModelLibrary().available
     )
+
+
+#: The flag of each model setting the command line takes.
+_FLAGS = {"xacro_args": "--xacro-arg", "tool_link": "--tool-link", "end_effector": "--end-effector"}
 
 
 def _xacro_arg(text: str) -> tuple[str, str]:
@@ -89,22 +105,34 @@ def spec_from_arguments(args: argparse.Namespace, models: ModelLibrary) -> Fleet
             f"got {len(args.model)} --model values for {len(names)} names; give one for all "
             "or one per name"
         )
-    available = models.names
+    shipped, own = models.names, models.own_models.names
     chosen = args.model * len(names) if len(args.model) == 1 else args.model
     arms: list[ArmSpec] = []
-    xacro_args = tuple(sorted(dict(getattr(args, "xacro_arg", [])).items()))
-    if xacro_args and not any(is_model_file(model) for model in chosen):
-        raise UsageError("--xacro-arg applies to a model file (--model PATH); none was given")
+    options = options_from_keywords(
+        "command line",
+        xacro_args=dict(getattr(args, "xacro_arg", [])) or None,
+        tool_link=getattr(args, "tool_link", None),
+        end_effector=getattr(args, "end_effector", None),
+    )
+    said = [_FLAGS[key] for key in options.given]
+    if said and all(model in shipped for model in chosen):
+        raise UsageError(
+            f"{', '.join(said)}: settings of a model file (--model PATH) or of one of your "
+            "own models; only shipped models were given"
+        )
     for name, model, at in zip(names, chosen, args.at, strict=True):
         check_arm_name(name, [arm.name for arm in arms])
         if is_model_file(model):  # read by the world's process: an absolute path
             if not model.startswith("package://"):
                 model = str(Path(model).expanduser().absolute())
-            arms.append(ArmSpec(name, model, SpawnPose.parse(at), xacro_args=xacro_args))
+            arms.append(ArmSpec(name, model, SpawnPose.parse(at), options=options))
             continue
-        if model not in available:
-            raise UnknownModel(model, available)
-        arms.append(ArmSpec(name, model, SpawnPose.parse(at)))
+        if model in shipped:
+            arms.append(ArmSpec(name, model, SpawnPose.parse(at)))
+        elif model in own:  # looked up by name in the world's process (docs/own-robot.md)
+            arms.append(ArmSpec(name, model, SpawnPose.parse(at), options=options))
+        else:
+            raise UnknownModel(model, models.available)
     return FleetSpec(arms=tuple(arms), source="command line")
 
 

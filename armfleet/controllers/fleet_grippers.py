@@ -4,8 +4,9 @@ What :meth:`GripperController.update` does for one gripper, done for all of them
 the blocked test of closing fingers and the law of fingers not yet squeezing
 (:func:`~armfleet.controllers.finger_law.finger_efforts`) run once over every
 finger column; only grippers that are squeezing something, or whose fingers just
-closed on it, compute their coupled-finger law on their own. Each gripper then
-publishes its state and advances its reference as it would alone.
+closed on it, compute their coupled-finger law on their own, and so do grippers with mimic joints
+or revolute jaws complete theirs (their leaders' efforts written first, as alone). Each
+gripper then publishes its state and advances its reference as it would alone.
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ class FleetGrippers:
         self._stiffness = np.concatenate([g.stiffness for g in self.grippers])
         self._gain = np.concatenate([g.gain for g in self.grippers])
         self._block_distance = np.concatenate([g.block_distance for g in self.grippers])
+        self._completing = [g for g in self.grippers if g.completes_efforts]
 
     def write_efforts(self) -> None:
         """Every gripper's finger efforts into the memory (before its reference advances)."""
@@ -77,6 +79,8 @@ class FleetGrippers:
                 part = self._segments[index]
                 effort[part] = self.grippers[index].squeeze_efforts(q[part], v[part])
         memory.rows[Row.EFFORT_COMMAND][columns] = effort
+        for gripper in self._completing:  # mimics and jaws: after the leaders, as alone
+            gripper.complete_efforts()
 
     def _all(self, flags: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
         """Per gripper: whether all its fingers' ``flags`` are set."""

@@ -142,7 +142,7 @@ class JerkLimitedTrajectory:
         if minimum_duration_s is not None:
             candidate.minimum_duration = float(minimum_duration_s)
         trajectory = ruckig.Trajectory(len(self.position))
-        result = self._otg.calculate(candidate, trajectory)
+        result = calculate(self._otg, candidate, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot plan this motion: {result}")
         extrema = trajectory.position_extrema
@@ -161,7 +161,7 @@ class JerkLimitedTrajectory:
         stopping = self._input_from_here(list(max_acceleration), list(max_jerk))
         stopping.control_interface = ruckig.ControlInterface.Velocity
         trajectory = ruckig.Trajectory(len(self.position))
-        result = self._otg.calculate(stopping, trajectory)
+        result = calculate(self._otg, stopping, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot plan a stop: {result}")
         self._take(stopping)
@@ -191,7 +191,7 @@ class JerkLimitedTrajectory:
             return np.array(self._samples.position[self._sample_index :], dtype=float)
         self._sync_input()
         trajectory = ruckig.Trajectory(dofs)
-        result = self._otg.calculate(self._input, trajectory)
+        result = calculate(self._otg, self._input, trajectory)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             return np.array([self.position], dtype=float)
         steps = max(1, int(np.ceil(trajectory.duration / period - 1e-9)))
@@ -268,3 +268,31 @@ class JerkLimitedTrajectory:
             self._moving = False
             self.velocity[:] = 0.0
             self.acceleration[:] = 0.0
+
+
+#: Relative cuts of the jerk limits tried when Ruckig fails on its own input.
+_JERK_NUDGES = (1e-9, 1e-6, 1e-3)
+
+
+def calculate(otg: Any, motion: Any, trajectory: Any) -> Any:
+    """Ruckig's ``calculate``, past its numerical edge cases.
+
+    Ruckig 0.19 raises ``RuckigError`` ("error in step 1") for a move from rest whose
+    length is exactly ``2 a^3 / j^2`` (0.1 rad with armfleet's 5 rad/s^2 and 50 rad/s^3):
+    a profile on the boundary between two of its cases. Such an input is planned again
+    with the jerk limits lowered by a hair (at most 1e-3 of them, so still within the
+    limits); ``motion`` keeps the limits that worked, and whatever follows it (the C++
+    stepper included) plans the same motion.
+
+    Raises:
+        TrajectoryError: Ruckig fails with every nudge too.
+    """
+    limits = list(motion.max_jerk)
+    for nudge in (0.0, *_JERK_NUDGES):
+        motion.max_jerk = [limit * (1.0 - nudge) for limit in limits]
+        try:
+            return otg.calculate(motion, trajectory)
+        except ruckig.RuckigError:
+            continue
+    motion.max_jerk = limits
+    raise TrajectoryError("Ruckig cannot plan this motion (a numerical failure of Ruckig)")

@@ -220,6 +220,15 @@ class PositionController(Controller):
         return self._ref_position[part], self._ref_velocity[part], self._ref_acceleration[part]
 
     @property
+    def inverse_dynamics_torque(self) -> FloatArray:
+        """Every movable joint's RNEA torque plus its damping torque at the last update,
+        before clipping [N m or N] (a released joint's: what holds it still against gravity
+        and the arm's motion); a read-only view."""
+        view = self._torque.view()
+        view.flags.writeable = False
+        return view
+
+    @property
     def held_positions(self) -> FloatArray:
         """Where the joints off the base-tool chain (fingers) are held [rad or m]."""
         held: FloatArray = self._ref_position[self._aux].copy()

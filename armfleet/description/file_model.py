@@ -20,23 +20,35 @@ What the description does not say is inferred by a stated rule:
   (``finger``, ``gripper``, ``jaw``, ``knuckle``); the arm's joints are the other movable
   joints from the root to tool0.
 - **home**: every arm joint at zero, clamped into its limits.
+
+Each can be given instead (``tool_link``, ``gripper_joints``, ``home``:
+:class:`~armfleet.description.model_options.ModelOptions`), checked against the file. A
+``tool0`` link of the file's own that is not the tool link is renamed ``file_tool0``.
+
+A continuous joint is a revolute joint with no position limit (its ``<limit>`` gives only
+its effort and velocity): :class:`~armfleet.kinematics.ArmKinematics` gives it infinite
+limits, and its angle is never wrapped.
 """
 
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 import xml.etree.ElementTree as ET
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from xml.sax.saxutils import escape
 
 import xacro
 
 from armfleet.checks.model_reference import DESCRIPTION_SUFFIXES
 from armfleet.description.ament_index import ament_index
+from armfleet.description.home_choice import HomeChoice
+from armfleet.description.model_options import ModelOptions
 from armfleet.description.package_finder import PackageFinder
-from armfleet.errors import DescriptionError
+from armfleet.errors import DescriptionError, ModelSettingError
 
 #: Largest description file read [bytes]: a robot's URDF is kilobytes, a mesh is no URDF.
 MAX_FILE_BYTES = 10_000_000
@@ -45,10 +57,10 @@ SUFFIXES = DESCRIPTION_SUFFIXES
 FINGER_WORDS = ("finger", "gripper", "jaw", "knuckle")
 #: Link names taken for the tool flange, in order.
 TOOL_NAMES = ("tool0", "flange", "tool_flange")
-MOVABLE = ("revolute", "prismatic")
+#: Joint types that move (a continuous joint is a revolute joint with no position limit).
+MOVABLE = ("revolute", "continuous", "prismatic")
 REFUSED_JOINTS = ("floating", "planar")
-#: Joint types armfleet does not simulate yet, refused in one line.
-UNSUPPORTED_JOINTS = ("continuous",)
+_QUOTES = {'"': "&quot;"}
 _URI_ATTRIBUTE = re.compile(r'filename="(?P<name>[^"]+)"')
 #: How ament_index_python says a ``$(find pkg)`` found nothing.
 _MISSING_PACKAGE = re.compile(r"package '([^']+)' not found")
@@ -56,15 +68,19 @@ _MISSING_PACKAGE = re.compile(r"package '([^']+)' not found")
 
 @dataclass(frozen=True)
 class ModelFile:
-    """A description file and the xacro arguments it is expanded with."""
+    """A description file and the xacro arguments it is expanded with (``options``: what
+    the user says about it besides, for a wrapper written with them)."""
 
     path: Path
     xacro_args: tuple[tuple[str, str], ...] = ()
+    options: ModelOptions | None = None
 
     @property
     def key(self) -> str:
-        """A short name of the file and its arguments, for generated file names."""
+        """A short name of the file, its arguments and options, for generated file names."""
         text = f"{self.path}|{self.xacro_args}"
+        if self.options is not None and not self.options.is_default:
+            text += f"|{self.options}"
         stem = re.sub(r"[^A-Za-z0-9_]", "_", self.path.name.split(".")[0])[:40] or "model"
         return f"{stem}_{hashlib.sha1(text.encode()).hexdigest()[:10]}"
 
@@ -116,6 +132,8 @@ def expand_file(model: ModelFile, finder: PackageFinder) -> str:
         )
     try:
         text = path.read_text(encoding="utf-8")
+    except OSError as exc:  # unreadable: permissions, a folder's race, a broken disk
+        raise DescriptionError(f"{path}: cannot read it ({exc.strerror})") from None
     except UnicodeDecodeError as exc:
         raise DescriptionError(
             f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})"
@@ -175,12 +193,25 @@ class Anatomy:
     gripper_joints: tuple[str, ...] = ()
 
 
-def anatomy(urdf: str, source: str) -> Anatomy:
+def anatomy(
+    urdf: str,
+    source: str,
+    tool_link: str | None = None,
+    gripper_joints: Sequence[str] | None = None,
+    home: Sequence[float] | None = None,
+) -> Anatomy:
     """The root, tool link, arm chain and home of ``urdf`` (see the module docstring).
 
+    ``tool_link``, ``gripper_joints`` and ``home``, when given, replace what the rule
+    would infer (:class:`~armfleet.description.model_options.ModelOptions`): the arm's
+    joints are then the movable joints from the root to that tool link, off the gripper.
+
     Raises:
-        DescriptionError: not a ``<robot>``, a floating or planar joint (or a continuous
-            one), two roots, or no movable joint between the root and the tool.
+        DescriptionError: not a ``<robot>``, a floating or planar joint, two roots, or no
+            movable joint between the root and the tool.
+        ModelSettingError: a given tool link that is no link of the file, a gripper joint
+            that is no movable joint or is on the arm chain, a home of the wrong length or
+            outside the limits (the valid choices named).
     """
     try:
         robot = ET.fromstring(urdf)
@@ -195,12 +226,7 @@ def anatomy(urdf: str, source: str) -> Anatomy:
         if kind in REFUSED_JOINTS:
             raise DescriptionError(
                 f"{source}: joint {name!r} is {kind}; an arm is fixed to the world (joints: "
-                "revolute, prismatic, fixed)"
-            )
-        if kind in UNSUPPORTED_JOINTS:
-            raise DescriptionError(
-                f"{source}: joint {name!r} is continuous, which armfleet does not simulate "
-                "yet; give it limits (type revolute) to use this description"
+                "revolute, continuous, prismatic, fixed)"
             )
         parent, child = joint.find("parent"), joint.find("child")
         if parent is None or child is None:
@@ -228,11 +254,22 @@ def anatomy(urdf: str, source: str) -> Anatomy:
             link = parent
         return out[::-1]
 
+    movable = [j.get("name", "") for j in robot.findall("joint") if j.get("type") in MOVABLE]
     gripper = {
         name
         for name, kind, _, element in joints.values()
         if kind in MOVABLE and (element.find("mimic") is not None or _named_like_finger(name))
     }
+    if gripper_joints is not None:
+        gripper = set(gripper_joints)
+        for wanted in gripper_joints:
+            if wanted not in movable:
+                raise ModelSettingError(
+                    source,
+                    "gripper_joints",
+                    f"{wanted!r} is no movable joint of the file; its movable joints: "
+                    f"{', '.join(movable) or 'none'}",
+                )
 
     def reach(link: str) -> tuple[int, int]:
         """(arm joints, all joints) from the root to ``link``; (-1, -1) past a finger."""
@@ -241,7 +278,26 @@ def anatomy(urdf: str, source: str) -> Anatomy:
             return (-1, -1)
         return (sum(kind in MOVABLE for _, kind, _ in joints_above), len(joints_above))
 
-    tool = _tool_link(links, root, reach)
+    if tool_link is None:
+        tool = _tool_link(links, root, reach)
+    elif tool_link in links and tool_link != "world":
+        tool = tool_link
+    else:
+        raise ModelSettingError(
+            source,
+            "tool_link",
+            f"{tool_link!r} is no link of the file; its links: "
+            f"{', '.join(n for n in links if n != 'world')}",
+        )
+    on_chain = [name for name, _, _ in chain(tool) if name in gripper]
+    if gripper_joints is not None and on_chain:
+        off_chain = [name for name in movable if name not in {n for n, _, _ in chain(tool)}]
+        raise ModelSettingError(
+            source,
+            "gripper_joints",
+            f"{on_chain[0]!r} is on the arm's chain from {root} to {tool}; gripper joints "
+            f"are movable joints off it: {', '.join(off_chain) or 'none'}",
+        )
     arm = [
         (name, element)
         for name, kind, element in chain(tool)
@@ -255,7 +311,7 @@ def anatomy(urdf: str, source: str) -> Anatomy:
         root,
         tool,
         tuple(n for n, _ in arm),
-        tuple(_zero_within(e) for _, e in arm),
+        tuple(_zero_within(e) for _, e in arm) if home is None else _given_home(source, arm, home),
         tuple(j.get("name", "") for j in robot.findall("joint") if j.get("name") in gripper),
     )
 
@@ -270,23 +326,54 @@ def _tool_link(links: list[str], root: str, reach: Callable[[str], tuple[int, in
     return max(candidates, key=reach, default=root)
 
 
+def _given_home(
+    source: str, arm: list[tuple[str, ET.Element]], home: Sequence[float]
+) -> tuple[float, ...]:
+    names = [name for name, _ in arm]
+    if len(home) != len(arm):
+        raise ModelSettingError(
+            source,
+            "home",
+            f"{len(home)} values for {len(arm)} arm joints; give one per joint: {', '.join(names)}",
+        )
+    for (name, joint), value in zip(arm, home, strict=True):
+        lower, upper = _position_limits(joint)
+        if not lower <= value <= upper:
+            raise ModelSettingError(
+                source, "home", f"{name} = {value:g} is outside its limits [{lower:g}, {upper:g}]"
+            )
+    return tuple(float(value) for value in home)
+
+
+def _position_limits(joint: ET.Element) -> tuple[float, float]:
+    """(lower, upper) of a movable joint [rad or m]; unbounded for a continuous one."""
+    limit = joint.find("limit")
+    if limit is None or joint.get("type") == "continuous":
+        return -math.inf, math.inf
+    return float(limit.get("lower", "0") or 0), float(limit.get("upper", "0") or 0)
+
+
 def _named_like_finger(joint: str) -> bool:
     return any(word in joint.lower() for word in FINGER_WORDS)
 
 
 def _zero_within(joint: ET.Element) -> float:
     limit = joint.find("limit")
-    if limit is None:
+    if limit is None or joint.get("type") == "continuous":  # its limit's bounds mean nothing
         return 0.0
     lower = float(limit.get("lower", "0") or 0)
     upper = float(limit.get("upper", "0") or 0)
     return min(max(0.0, lower), upper) if lower <= upper else 0.0
 
 
-def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
+def wrapper_xacro(
+    name: str, upstream: Path, found: Anatomy, home_choice: HomeChoice | None = None
+) -> str:
     """The wrapper armfleet writes for a description file (as ``description/`` holds for
-    the shipped models): the world anchor, base_link and tool0 around the prefixed file."""
+    the shipped models): the world anchor, base_link and tool0 around the prefixed file,
+    and which home it has (``home_choice``)."""
     home = " ".join(repr(value) for value in found.home)
+    chosen = "" if home_choice is None else home_choice.text
     gripper = " ".join(found.gripper_joints)
     base = "" if found.root == "base_link" else _landmark("base_link", "base_link", found.root)
     tool = "" if found.tool == "tool0" else _landmark("tool0", found.tool, "tool0")
@@ -296,6 +383,7 @@ def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
   <xacro:property name="armfleet_upstream_urdf" value="file://{upstream}"/>
   <xacro:property name="armfleet_home" value="{home}"/>
   <xacro:property name="armfleet_gripper_joints" value="{gripper}"/>
+  <xacro:property name="armfleet_home_choice" value="{escape(chosen, _QUOTES)}"/>
   <xacro:arg name="prefix" default=""/>
   <xacro:arg name="xyz" default="0 0 0"/>
   <xacro:arg name="rpy" default="0 0 0"/>
@@ -311,6 +399,31 @@ def wrapper_xacro(name: str, upstream: Path, found: Anatomy) -> str:
   <xacro:upstream prefix="${{prefix}}"/>{tool}
 </robot>
 """
+
+
+#: The name a file's own ``tool0`` link gets when another link is the tool link (the
+#: landmark ``tool0`` is then armfleet's, on that link).
+FILE_TOOL0 = "file_tool0"
+
+
+def free_tool0(urdf: str, found: Anatomy) -> str:
+    """``urdf`` with its own ``tool0`` link renamed :data:`FILE_TOOL0` if the tool link is
+    another (a given ``tool_link``), so that the landmark ``tool0`` can go there."""
+    if found.tool == "tool0":
+        return urdf
+    robot = ET.fromstring(urdf)
+    renamed = False
+    for link in robot.iter("link"):
+        if link.get("name") == "tool0":
+            link.set("name", FILE_TOOL0)
+            renamed = True
+    if not renamed:
+        return urdf
+    for joint in robot.iter("joint"):
+        for end in (joint.find("parent"), joint.find("child")):
+            if end is not None and end.get("link") == "tool0":
+                end.set("link", FILE_TOOL0)
+    return ET.tostring(robot, encoding="unicode")
 
 
 def _landmark(frame: str, parent: str, child: str) -> str:

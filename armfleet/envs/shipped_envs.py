@@ -3,6 +3,7 @@ classes, so that ``gymnasium.make`` finds their metadata."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -12,15 +13,18 @@ from armfleet.envs.tasks.handover_task import HandoverTask, RewardKind
 from armfleet.envs.tasks.reach_task import ReachTask
 from armfleet.envs.tasks.task import SceneTask
 from armfleet.scenarios.handover import TOLERANCE_M
+from armfleet.scenarios.reach import MODEL
 from armfleet.spec import FleetSpec
 
 
 class ReachEnv(MultiArmEnv):
-    """``armfleet/Reach-v0``: ``arm_count`` Pandas reach random targets
-    (:class:`~armfleet.envs.tasks.ReachTask`); joint-delta actions by default.
+    """``armfleet/Reach-v0``: ``arm_count`` arms (Pandas unless ``model`` names another)
+    reach random targets (:class:`~armfleet.envs.tasks.ReachTask`); joint-delta actions by
+    default.
 
     Args:
-        arm_count, spacing_m, tolerance_m: of the task.
+        arm_count, spacing_m, tolerance_m, model: of the task (``model``: a shipped
+            model, one's own by name, or a model file).
         **options: of :class:`MultiArmEnv`.
     """
 
@@ -29,10 +33,12 @@ class ReachEnv(MultiArmEnv):
         arm_count: int = 2,
         spacing_m: float = 1.0,
         tolerance_m: float = 0.02,
+        model: str | os.PathLike[str] = MODEL,
         **options: Any,
     ) -> None:
         options.setdefault("action_kind", ActionKind.JOINT_DELTAS)
-        super().__init__(ReachTask(arm_count, spacing_m, tolerance_m), **options)
+        task = ReachTask(arm_count, spacing_m, tolerance_m, model=model)
+        super().__init__(task, **options)
 
 
 class HandoverEnv(MultiArmEnv):

@@ -1,4 +1,8 @@
-"""Pinocchio model of one arm, built from the very URDF text PyBullet loaded."""
+"""Pinocchio model of one arm, built from the very URDF text PyBullet loaded.
+
+A continuous joint is read as a revolute one with the limits -inf and +inf (one
+coordinate per joint, as PyBullet has it: :mod:`~armfleet.kinematics.continuous_joints`).
+"""
 
 from __future__ import annotations
 
@@ -8,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from armfleet.errors import DescriptionError
+from armfleet.kinematics.continuous_joints import as_revolute, continuous_joint_names
 from armfleet.messages import FloatArray
 
 
@@ -37,8 +42,12 @@ class ArmKinematics:
     """
 
     def __init__(self, urdf: str, tool_frame: str) -> None:
+        continuous = continuous_joint_names(urdf)
         try:
-            self.model = pin.buildModelFromXML(urdf)
+            self.model = pin.buildModelFromXML(as_revolute(urdf) if continuous else urdf)
+            # Effort and velocity limits as the file gives them (as_revolute adds a
+            # <limit> where a continuous joint has none): same joints, same velocity order.
+            as_written = pin.buildModelFromXML(urdf) if continuous else self.model
         except (RuntimeError, ValueError) as exc:
             raise DescriptionError(f"Pinocchio cannot build the model: {exc}") from exc
         self.data = self.model.createData()
@@ -48,7 +57,9 @@ class ArmKinematics:
                 for j in range(1, self.model.njoints)
                 if self.model.joints[j].nq != self.model.joints[j].nv
             ]
-            raise DescriptionError(f"unsupported continuous/multi-DoF joints: {', '.join(names)}")
+            raise DescriptionError(
+                f"joints of more than one coordinate are not simulated: {', '.join(names)}"
+            )
         if not self.model.existFrame(tool_frame):
             raise DescriptionError(f"the description has no landmark frame {tool_frame!r}")
         tool_joint = self.model.frames[body_frame_id(self.model, tool_frame)].parentJoint
@@ -62,6 +73,17 @@ class ArmKinematics:
             [self.model.joints[j].idx_q for j in range(1, self.model.njoints) if j not in chain],
             dtype=int,
         )
+        #: Per movable joint (q order): whether it is continuous (no position limit).
+        self.continuous = np.array([name in continuous for name in self.joint_names], dtype=bool)
+        self.model.lowerPositionLimit = np.where(
+            self.continuous, -np.inf, self.model.lowerPositionLimit
+        )
+        self.model.upperPositionLimit = np.where(
+            self.continuous, np.inf, self.model.upperPositionLimit
+        )
+        self.model.velocityLimit = as_written.velocityLimit.copy()
+        self.model.effortLimit = as_written.effortLimit.copy()
+        #: Position limits (q order) [rad or m]; -inf and +inf for a continuous joint.
         self.lower = np.array(self.model.lowerPositionLimit, dtype=float)
         self.upper = np.array(self.model.upperPositionLimit, dtype=float)
         self.velocity_limit = np.array(self.model.velocityLimit, dtype=float)
@@ -76,6 +98,14 @@ class ArmKinematics:
             if frame.type == pin.FrameType.BODY
         }
         self._fk_q: FloatArray | None = None
+
+    def mid_range(self) -> FloatArray:
+        """The middle of every movable joint's range (q order), 0 for a continuous joint
+        (it has none); a new array [rad or m]."""
+        middle: FloatArray = np.zeros(self.model.nq)
+        bounded = ~self.continuous
+        middle[bounded] = 0.5 * (self.lower[bounded] + self.upper[bounded])
+        return middle
 
     @property
     def link_names(self) -> tuple[str, ...]:

@@ -21,6 +21,10 @@ configurations tried, the k-th within ``k * restart_spread_rad`` of the seed
 in each joint, so that nearer solutions come first (drawn from a generator
 seeded per call: a solve is deterministic). An attempt gives up when its error
 has not halved for 10 iterations.
+
+A continuous joint has no limit to clamp to or keep away from; its angle in the solution
+is the equivalent one nearest the seed's (within ±pi of it), so the arm turns it the short
+way and it never drifts by whole turns.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from armfleet.checks.real_numbers import all_real
 from armfleet.errors import TargetPoseError, UnknownFrame
 from armfleet.kinematics import ArmKinematics
 from armfleet.kinematics.arm_kinematics import body_frame_id
+from armfleet.kinematics.continuous_joints import nearest_turn
 from armfleet.messages import FloatArray
 
 #: Orthonormality and last-row tolerance of a 4x4 pose given by a user.
@@ -162,8 +167,14 @@ class InverseKinematics:
         self.max_restarts = max_restarts
         self.max_step_rad = max_step_rad
         self.restart_spread_rad = restart_spread_rad
+        self._continuous = kinematics.continuous[self._arm]
         self._redundant = self._arm.size > 6
-        self._margin = 0.1 * (self._upper - self._lower)
+        # A redundant arm's joint within 10 % of its range from a limit is pushed back,
+        # from below these [rad or m]: never a continuous one (it has no limit).
+        margin = np.where(self._continuous, 1.0, 0.1 * (self._upper - self._lower))
+        self._margin = margin
+        self._pushed_below = np.where(self._continuous, -np.inf, self._lower + margin)
+        self._pushed_above = np.where(self._continuous, np.inf, self._upper - margin)
 
     def frame_pose(self, frame: str, q: FloatArray) -> pin.SE3:
         """World pose of ``frame`` at configuration ``q`` (every movable joint)."""
@@ -200,6 +211,8 @@ class InverseKinematics:
             if result[1] or result[2] + result[3] < best[2] + best[3]:
                 best = result
         q, converged, position_error, rotation_error, _ = best
+        arm = self._arm
+        q[arm] = nearest_turn(q[arm], np.asarray(seed, dtype=float)[arm], self._continuous)
         return IkSolution(q, converged, position_error, rotation_error, iterations, tries)
 
     def _attempt(
@@ -244,8 +257,8 @@ class InverseKinematics:
 
     def _limit_avoidance(self, q: FloatArray, projector: FloatArray) -> FloatArray:
         """A null-space step pushing joints near a limit back towards their range [rad]."""
-        low = np.maximum(self._lower + self._margin - q, 0.0)
-        high = np.maximum(q - (self._upper - self._margin), 0.0)
+        low = np.maximum(self._pushed_below - q, 0.0)
+        high = np.maximum(q - self._pushed_above, 0.0)
         push = (low - high) / self._margin
         if not push.any():
             return np.zeros_like(q)

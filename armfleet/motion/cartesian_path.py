@@ -27,7 +27,7 @@ import numpy as np
 import pinocchio as pin
 import ruckig
 
-from armfleet.controllers.jerk_limited_trajectory import SampledMotion, TrajectoryError
+from armfleet.controllers.jerk_limited_trajectory import SampledMotion, TrajectoryError, calculate
 from armfleet.controllers.position_controller import PositionController
 from armfleet.errors import UnreachablePose
 from armfleet.kinematics.inverse_kinematics import InverseKinematics
@@ -172,7 +172,7 @@ class LinearPathPlanner:
         path.max_acceleration = [float(limits[1])]
         path.max_jerk = [float(limits[2])]
         timing = ruckig.Trajectory(1)
-        result = otg.calculate(path, timing)
+        result = calculate(otg, path, timing)
         if result not in (ruckig.Result.Working, ruckig.Result.Finished):
             raise TrajectoryError(f"Ruckig cannot time the straight line: {result}")
         steps = max(1, math.ceil(timing.duration / self._period - 1e-9))

@@ -19,6 +19,7 @@ from armfleet.checks.real_numbers import is_real_vector
 from armfleet.errors import ObjectError, UnknownObject
 from armfleet.messages import FloatArray
 from armfleet.objects.object_spec import ObjectSpec, Shape, pose_matrix
+from armfleet.physics.body_removal import remove_body
 from armfleet.physics.link_damping import disable_link_damping
 from armfleet.runtime.lifetime import Lifetime, while_alive
 
@@ -250,7 +251,7 @@ class WorldObject:
         self._lifetime.end()  # its handles raise UnknownObject from now on
         self._removed = True
         # Its collision shape stays: PyBullet refuses to remove a shape a body used.
-        p.removeBody(self._body_id, physicsClientId=self._client)
+        remove_body(self._client, self._body_id)
 
     def __repr__(self) -> str:
         kind = "static" if self.is_static else f"{self.mass:g} kg"

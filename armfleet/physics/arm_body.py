@@ -21,6 +21,7 @@ import pybullet as p
 
 from armfleet.errors import DescriptionError
 from armfleet.messages import FloatArray
+from armfleet.physics.body_removal import remove_body
 from armfleet.physics.lean_urdf import lean_urdf
 from armfleet.physics.link_damping import disable_link_damping
 
@@ -192,7 +193,8 @@ class ArmBody:
         return {point[2] for point in points if point[2] != self.body_id and point[8] <= 0.0}
 
     def remove(self) -> None:
-        p.removeBody(self.body_id, physicsClientId=self._client)
+        """Take the body out of the world, and its collision filters with it."""
+        remove_body(self._client, self.body_id)
 
 
 def _matrix(position: Sequence[float], quaternion: Sequence[float]) -> FloatArray:

@@ -48,12 +48,19 @@ class Home:
     reason: str = ""
 
 
-def clear_home(urdf: str, arm_joints: Sequence[str], preferred: Sequence[float]) -> Home:
+def clear_home(
+    urdf: str, arm_joints: Sequence[str], preferred: Sequence[float], search: bool = True
+) -> Home:
     """A home of ``arm_joints`` (URDF joint names, in chain order) for ``urdf`` (URIs resolved,
     the arm's root at the origin), preferring ``preferred``.
 
+    With ``search`` False, ``preferred`` is a home the user gave: it is the home if it is
+    clear as a spawn's start pose is (no link nearer itself or the floor than
+    :data:`SELF_MARGIN_M`), and nothing else is tried.
+
     Raises:
-        DescriptionError: no drawn configuration is clear either.
+        DescriptionError: no drawn configuration is clear either; without ``search``, the
+            given home is not clear (what it touches named).
     """
     lean = lean_urdf(urdf)
     client = p.connect(p.DIRECT)
@@ -77,10 +84,17 @@ def clear_home(urdf: str, arm_joints: Sequence[str], preferred: Sequence[float])
         _others_mid_range(client, body, indices)  # as the arm is assembled: fingers half open
         joined = _joined_pairs(client, body)
         margin = min(FLOOR_MARGIN_M, FLOOR_SHARE * _length(client, body))
+        margin = margin if search else SELF_MARGIN_M
         start = np.asarray(preferred, dtype=float)
         problem = _touching(client, body, floor, indices, start, joined, margin)
         if problem is None:
             return Home(tuple(float(v) for v in start), True)
+        if not search:
+            shown = ", ".join(f"{v:g}" for v in start)
+            raise DescriptionError(
+                f"home: [{shown}] touches {problem} (within {SELF_MARGIN_M * 1e3:g} mm); "
+                "give a home clear of the arm itself and the floor"
+            )
         rng = np.random.default_rng(SEED)
         for reach in REACHES_RAD:  # nearest first: small changes of the preferred pose
             drawn = np.clip(

@@ -5,6 +5,10 @@ arms, objects or what the grippers hold change; otherwise only moved), turns its
 into a :class:`PlanningProblem`, finds a proven-clear path, times it, checks it in time
 against the arms that are moving, and returns a :class:`Plan`. Nothing moves until
 :meth:`MotionPlanner.execute`.
+
+A continuous joint's goal is the equivalent of the asked angle nearest its start (a planned
+move takes the short way round: from 3.0 rad, a goal of -3.0 rad ends at 2 pi - 3.0), and it
+is searched over a window of a turn and more (:func:`~armfleet.planning.problem.search_bounds`).
 """
 
 from __future__ import annotations
@@ -14,10 +18,11 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from armfleet.checks.number_ranges import CLEARANCE_M, PLANNING_TIMEOUT_S
-from armfleet.controllers.gripper_controller import finger_indices
+from armfleet.controllers.gripper_joints import finger_indices
 from armfleet.controllers.jerk_limited_trajectory import SampledMotion
 from armfleet.errors import (
     ArmFault,
@@ -27,6 +32,7 @@ from armfleet.errors import (
     UnknownArm,
     UnreachablePose,
 )
+from armfleet.kinematics.continuous_joints import nearest_turn
 from armfleet.messages import FloatArray, PlannedMotion
 from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
 from armfleet.motion.pose_goal import PoseGoal
@@ -38,7 +44,7 @@ from armfleet.planning.path_search import find_path
 from armfleet.planning.path_timing import JointLimits, TimedPath
 from armfleet.planning.plan import Plan
 from armfleet.planning.planned_arm import PlannedArm
-from armfleet.planning.problem import PlanningProblem
+from armfleet.planning.problem import PlanningProblem, search_bounds
 from armfleet.planning.scene import ArmGeometry, PlanningScene, SceneObject, arm_geometry
 
 if TYPE_CHECKING:
@@ -113,8 +119,13 @@ class MotionPlanner:
         mark = time.perf_counter()
         goal = self._goal_state(arms, goals, start, checker)
         seconds["ik"] = time.perf_counter() - mark
-        lower = np.concatenate([arm.position_controller.lower for arm in arms])
-        upper = np.concatenate([arm.position_controller.upper for arm in arms])
+        lower, upper = search_bounds(
+            np.concatenate([arm.position_controller.lower for arm in arms]),
+            np.concatenate([arm.position_controller.upper for arm in arms]),
+            np.concatenate([_continuous(arm) for arm in arms]),
+            start,
+            goal,
+        )
         problem = PlanningProblem(names, start, goal, lower, upper, checker, timeout_s)
         path = find_path(problem, deadline=began + timeout_s)
         seconds.update(path.seconds)
@@ -172,7 +183,10 @@ class MotionPlanner:
         self, arms: list[PlannedArm], goals: Mapping[str, Goal], start: FloatArray, checker: Any
     ) -> FloatArray:
         """The goal state: joint goals as given, pose goals by IK, preferring a solution
-        clear of collisions when the nearest one is not."""
+        clear of collisions when the nearest one is not; a continuous joint's angle the
+        equivalent nearest its start."""
+        continuous = np.concatenate([_continuous(arm) for arm in arms])
+        offsets = np.cumsum([0, *(len(arm.joint_names) for arm in arms)])
         parts: list[FloatArray] = []
         pose_goals: dict[int, tuple[PlannedArm, PoseGoal]] = {}
         for index, arm in enumerate(arms):
@@ -182,18 +196,19 @@ class MotionPlanner:
                 pose_goals[index] = (arm, goal)
             else:
                 parts.append(arm.position_controller.validate(goal))
-        state = np.concatenate(parts)
+        state = nearest_turn(np.concatenate(parts), start, continuous)
         if not pose_goals or checker.valid(state):
             return state
         generator = np.random.default_rng(0)
         for _ in range(IK_ALTERNATIVES):
             for index, (arm, goal) in pose_goals.items():  # one arm at a time: the others
-                lower, upper = arm.joint_limits  # keep what they have found
+                here = start[offsets[index] : offsets[index + 1]]  # keep what they have found
+                low, high = search_bounds(*arm.joint_limits, _continuous(arm), here, here)
                 try:
-                    parts[index] = _solve_pose(arm, goal, generator.uniform(lower, upper))
+                    parts[index] = _solve_pose(arm, goal, generator.uniform(low, high))
                 except ArmfleetError:
                     continue
-                candidate = np.concatenate(parts)
+                candidate = nearest_turn(np.concatenate(parts), start, continuous)
                 if checker.valid(candidate):
                     return candidate
         return state  # the nearest solution; the search names what it touches
@@ -233,7 +248,8 @@ class MotionPlanner:
         if cached is not None and cached[0] is arm:
             return cached[1]
         kinematics = arm.kinematics
-        fingers = [kinematics.joint_names[i] for i in finger_indices(kinematics)]
+        named = arm.description.gripper_joints
+        fingers = [kinematics.joint_names[i] for i in finger_indices(kinematics, named)]
         geometry = arm_geometry(
             arm.name,
             arm.description.urdf,
@@ -343,6 +359,13 @@ def _solve_pose(arm: PlannedArm, goal: PoseGoal, seed: FloatArray | None) -> Flo
         return arm.solve_ik(goal.pose, goal.frame, link=goal.link, seed=seed)
     except UnreachablePose as exc:
         raise PlanningFailed(FailureReason.GOAL_UNREACHABLE, str(exc), arms=(arm.name,)) from exc
+
+
+def _continuous(arm: PlannedArm) -> npt.NDArray[np.bool_]:
+    """Per joint of ``arm.joint_names``: whether it is continuous (no position limit)."""
+    kinematics = arm.kinematics
+    mask: npt.NDArray[np.bool_] = kinematics.continuous[kinematics.arm_indices]
+    return mask
 
 
 def _limits(arms: list[PlannedArm]) -> JointLimits:

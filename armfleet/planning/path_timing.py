@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import ruckig
 
-from armfleet.controllers.jerk_limited_trajectory import SampledMotion, TrajectoryError
+from armfleet.controllers.jerk_limited_trajectory import SampledMotion, TrajectoryError, calculate
 from armfleet.messages import FloatArray
 
 
@@ -104,7 +104,7 @@ def _segment_timing(span: FloatArray, limits: JointLimits) -> ruckig.Trajectory:
         path.max_jerk = [float(np.min(limits.jerk[moving] / span[moving]))]
     else:
         path.max_velocity, path.max_acceleration, path.max_jerk = [1.0], [1.0], [1.0]
-    result = ruckig.Ruckig(1).calculate(path, timing)
+    result = calculate(ruckig.Ruckig(1), path, timing)
     if result not in (ruckig.Result.Working, ruckig.Result.Finished):
         raise TrajectoryError(f"Ruckig cannot time a path segment: {result}")
     return timing

@@ -45,6 +45,8 @@ def spec_yaml(spec: FleetSpec) -> str:
             "model": arm.model,
             "at_m": [pose.x, pose.y, pose.z],
         }
+        if not arm.options.is_default:  # a model file and what was said about it
+            entry["model"] = {"file": arm.model, **arm.options.to_mapping()}
         if pose.tilted:
             entry["rpy_deg"] = [pose.roll_deg, pose.pitch_deg, pose.yaw_deg]
         else:

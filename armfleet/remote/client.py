@@ -13,6 +13,7 @@ import zmq
 from armfleet.checks import number_ranges
 from armfleet.checks.model_reference import is_model_file
 from armfleet.checks.network_address import normalize_address
+from armfleet.description.model_options import options_from_keywords
 from armfleet.errors import ArmfleetError
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import FloatArray, JointCommand, Positions
@@ -126,6 +127,10 @@ class Client:
         initial_positions: Positions | None = None,
         parameters: Mapping[str, Mapping[str, float]] | None = None,
         xacro_args: Mapping[str, str] | None = None,
+        tool_link: str | None = None,
+        gripper_joints: Sequence[str] | None = None,
+        home: Positions | None = None,
+        end_effector: Mapping[str, Any] | str | None = None,
         timeout: float = SPAWN_TIMEOUT_S,
     ) -> RemoteArm:
         """Bring an arm up in the world (after any bring-up already queued) and return it.
@@ -139,13 +144,26 @@ class Client:
             initial_positions: arm joint positions at spawn [rad]; the model's home if None.
             parameters: per-controller parameter overrides for this arm.
             xacro_args: arguments of a xacro model file.
+            tool_link, gripper_joints, home, end_effector: what the model file does not
+                say, as :meth:`armfleet.World.spawn` takes them; the end effector's file
+                is read by the world's process too (made absolute here).
             timeout: wait for the arm to be ready [s].
+
+        Raises:
+            ModelSettingError: a bad setting (checked here, before anything is sent).
         """
         if isinstance(model, str) and is_model_file(model) and not model.startswith("package:"):
             model = str(Path(model).expanduser().absolute())
+        options = options_from_keywords(
+            "spawn",
+            xacro_args=xacro_args,
+            tool_link=tool_link,
+            gripper_joints=gripper_joints,
+            home=home,
+            end_effector=end_effector,
+        )
         args: dict[str, Any] = {"name": name, "model": model, "at": _pose(at)}
-        if xacro_args:
-            args["xacro_args"] = {str(k): str(v) for k, v in xacro_args.items()}
+        args.update(options.to_mapping())
         if initial_positions is not None:
             args["initial_positions"] = [float(v) for v in initial_positions]
         if parameters:

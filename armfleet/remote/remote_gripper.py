@@ -29,15 +29,29 @@ class RemoteGripper:
         self._arm = arm
         self._max_width = float(description["max_width"])
         self._max_force = float(description["max_force"])
+        # Worlds before revolute jaws sent none of these: fingers, in metres and newtons.
+        self._min_width = float(description.get("min_width", 0.0))
+        self._width_unit = str(description.get("width_unit", "m"))
+        self._force_unit = str(description.get("force_unit", "N"))
 
     @property
     def max_width(self) -> float:
-        """Widest opening [m]."""
+        """Widest opening [m, or rad for revolute jaws]."""
         return self._max_width
 
     @property
+    def min_width(self) -> float:
+        """Narrowest opening [m, or rad for revolute jaws]."""
+        return self._min_width
+
+    @property
+    def width_unit(self) -> str:
+        """``m`` for prismatic fingers, ``rad`` for a revolute jaw."""
+        return self._width_unit
+
+    @property
     def max_force(self) -> float:
-        """Strongest force a finger can press with [N]."""
+        """Strongest force a finger can press with [N, or N m for revolute jaws]."""
         return self._max_force
 
     def open(self, *, force: float | None = None) -> GripperState:
@@ -50,7 +64,8 @@ class RemoteGripper:
         return self._grip("close", None, force)
 
     def move_to(self, width: float, *, force: float | None = None) -> GripperState:
-        """Go to the opening ``width`` [m], pushing with at most ``force`` [N] per finger."""
+        """Go to the opening ``width`` [m, or rad], pushing with at most ``force`` [N, or
+        N m] per finger."""
         return self._grip("width", width, force)
 
     def wait(self, timeout: float = GRIP_WAIT_TIMEOUT_S) -> GripperState:
@@ -95,10 +110,10 @@ class RemoteGripper:
         # out of range goes to the world, which names the range.
         args: dict[str, Any] = {"name": self._arm, "action": action}
         if action == "width":
-            valid = f"a width in [0, {self._max_width:g}] m"
+            valid = f"a width in [{self._min_width:g}, {self._max_width:g}] {self._width_unit}"
             args["width"] = real_number(width, f"{self._arm}: gripper width", valid, finite=False)
         if force is not None:
-            valid = f"a force in (0, {self._max_force:g}] N"
+            valid = f"a force in (0, {self._max_force:g}] {self._force_unit}"
             args["force"] = real_number(force, f"{self._arm}: gripper force", valid, finite=False)
         return _state(self._client.call("grip", args))
 

@@ -19,6 +19,10 @@ farthest joint moves up to 3.6 rad).
 Physical failures are outcomes, not errors: IK that does not converge (the target is not
 sent), and protective stops (a neighbour, the arm itself or the floor touched on the
 way). An arm in protective stop stays there: its later targets are not sent (no reset).
+
+The arms are Pandas unless ``model`` names another: a shipped model, one's own by name, or
+a model file (docs/own-robot.md; a sweep's workers read it, so give an absolute path or a
+``package://`` URI there).
 """
 
 from __future__ import annotations
@@ -115,8 +119,10 @@ def reach(
     min_tool_height_m: float = 0.1,
     tolerance_m: float = 0.005,
     tolerance_deg: float = 2.0,
+    model: str = MODEL,
 ) -> Metrics:
-    """Spawn a row of Pandas and send each to random reachable tool poses, all at once.
+    """Spawn a row of arms (Pandas by default) and send each to random reachable tool
+    poses, all at once.
 
     Args:
         world: the launched world (empty, or without arms named ``arm<i>``).
@@ -129,6 +135,7 @@ def reach(
         min_tool_height_m: lowest tool0 height of a target [m].
         tolerance_m, tolerance_deg: a target counts as reached when tool0 ends within
             this distance [m] and angle [deg] of it.
+        model: the arms' model: a shipped model, one's own by name, or a model file.
 
     Returns:
         ``arms`` (int), ``targets`` (int, all arms), ``reached_fraction`` (reached
@@ -144,7 +151,7 @@ def reach(
             (StartPoseCollision): a spec or sweep to fix, not an outcome.
     """
     count = _whole(targets_per_arm, "targets_per_arm")
-    arms = spawn_row(world, arm_count, spacing_m)
+    arms = spawn_row(world, arm_count, spacing_m, model)
     targets = draw_row_targets(
         arms, rng, count, limit_margin=limit_margin, min_tool_height_m=min_tool_height_m
     )
@@ -152,14 +159,15 @@ def reach(
     return outcome.metrics(len(arms), tolerance_m, tolerance_deg)
 
 
-def spawn_row(world: World, count: int, spacing_m: float) -> list[Arm]:
-    """``count`` Pandas ``arm0``, ``arm1``, ... at x = 0, ``spacing_m``, ..., y = 0, facing +y."""
+def spawn_row(world: World, count: int, spacing_m: float, model: str = MODEL) -> list[Arm]:
+    """``count`` arms of ``model`` (Pandas by default) ``arm0``, ``arm1``, ... at x = 0,
+    ``spacing_m``, ..., y = 0, facing +y."""
     count = _whole(count, "arm_count")
     spacing_m = real_number(
         spacing_m, "spacing_m", "a distance in [0.01, 100] m", low=0.01, high=100
     )
     return [
-        world.spawn(f"arm{i}", MODEL, at=(i * spacing_m, 0.0, 0.0, FACING_DEG))
+        world.spawn(f"arm{i}", model, at=(i * spacing_m, 0.0, 0.0, FACING_DEG))
         for i in range(count)
     ]
 

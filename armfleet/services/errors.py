@@ -5,7 +5,7 @@ from __future__ import annotations
 import difflib
 from typing import Any
 
-from armfleet.errors import ArmfleetError
+from armfleet.errors import ArmfleetError, DescriptionError
 from armfleet.planning.failure import FailureReason, PlanningFailed
 from armfleet.runtime.bus import TOPIC_PATTERN
 
@@ -141,3 +141,23 @@ class TopicGone(ArmfleetError):
     def __init__(self, topic: str, reason: str) -> None:
         self.topic = topic
         super().__init__(reason if topic in reason else f"topic {topic} is gone: {reason}")
+
+
+class ModelFileUnreadable(DescriptionError):
+    """A model file (or an end effector's) that the process owning the world cannot read:
+    the live API's model files are read there, not where the client runs.
+
+    Attributes:
+        field: the request's field (``model``, ``end_effector.file``).
+        path: the path as the world's process saw it.
+        reason: why it cannot be read (``not found``, ``permission denied``...).
+        pid, host: the world's process and its machine.
+    """
+
+    def __init__(self, field: str, path: str, reason: str, pid: int, host: str) -> None:
+        self.field, self.path, self.reason, self.pid, self.host = field, path, reason, pid, host
+        super().__init__(
+            f"{field} {path!r}, as the process that owns the world (process {pid} on {host}) "
+            f"sees it: {reason}; that process reads model files, not the client: give a path "
+            "it can read, or a shipped model (armfleet models)"
+        )

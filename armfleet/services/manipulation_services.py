@@ -140,7 +140,13 @@ class ManipulationServices:
 def describe_gripper(gripper: Gripper, stamp: float) -> dict[str, Any]:
     """A gripper's state and limits, as ``grip`` and the arm descriptions report it."""
     state: dict[str, Any] = to_wire(gripper.state(stamp))
-    return state | {"max_width": gripper.max_width, "max_force": gripper.max_force}
+    return state | {
+        "max_width": gripper.max_width,
+        "max_force": gripper.max_force,
+        "min_width": gripper.min_width,
+        "width_unit": gripper.width_unit,
+        "force_unit": gripper.force_unit,
+    }
 
 
 def _sized(args: Arguments, key: str, length: int) -> list[float]:

@@ -14,14 +14,16 @@ from typing import Any
 
 from armfleet.arms.arm import Arm
 from armfleet.checks.number_ranges import STEP_COUNT
+from armfleet.description.model_options import SETTING_KEYS, parse_model_options
 from armfleet.errors import ArmFault, ArmfleetError, ProtectiveStopError
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import ArmMode, JointCommand
 from armfleet.runtime.bus import Subscription
 from armfleet.services.arguments import Arguments
 from armfleet.services.codec import to_wire
-from armfleet.services.errors import ProtocolError, UnknownService, UnknownTopic
+from armfleet.services.errors import UnknownService, UnknownTopic
 from armfleet.services.manipulation_services import ManipulationServices, describe_gripper
+from armfleet.services.model_file_access import require_readable_model_files
 from armfleet.services.object_services import ObjectServices
 from armfleet.services.planning_options import PLANNING_FIELDS, PlanningOptions
 from armfleet.services.protocol import Service, armfleet_version
@@ -43,7 +45,7 @@ FIELDS: dict[Service, tuple[str, ...]] = {
     Service.ARM: ("name",),
     Service.JOINT_STATE: ("name",),
     Service.LOOKUP: ("target", "source"),
-    Service.SPAWN: ("name", "model", "at", "initial_positions", "parameters"),
+    Service.SPAWN: ("name", "model", "at", "initial_positions", "parameters", *SETTING_KEYS),
     Service.REMOVE: ("name",),
     Service.MOVE: ("name", "positions", *PLANNING_FIELDS),
     Service.MOVE_POSE: ("name", "pose", "position", "frame", "link", "linear", *PLANNING_FIELDS),
@@ -162,21 +164,22 @@ class WorldServices:
 
     # -- arms -------------------------------------------------------------------------
     def prepare_spawn(self, args: Arguments) -> Work:
-        """A model file is read by this process, the world's: its path must be one this
-        process can read (the client makes a relative path absolute on its side)."""
+        """A model file (and an end effector's) is read by this process, the world's: its
+        path must be one this process can read (the client makes a relative path absolute
+        on its side), else :class:`~armfleet.services.errors.ModelFileUnreadable` says
+        so before the world is touched. The model's settings are the fields of
+        :data:`~armfleet.description.model_options.SETTING_KEYS`."""
         initial = args.vector("initial_positions", None)
-        given = args.mapping("xacro_args", {})
-        for key, value in given.items():
-            if not isinstance(key, str) or not isinstance(value, str):
-                raise ProtocolError("spawn: 'xacro_args' maps argument names to text values")
+        settings = {key: args.raw(key) for key in SETTING_KEYS if args.has(key)}
         spec = ArmSpec(
             args.text("name"),
             args.text("model", "panda"),
             _pose(args),
             None if initial is None else tuple(initial),
             _controllers(args),
-            tuple(sorted(given.items())),
+            parse_model_options(settings, "spawn"),
         )
+        require_readable_model_files(spec.model, spec.options)  # the world untouched
         world = self._world
 
         def spawn() -> dict[str, Any]:
@@ -334,6 +337,7 @@ def describe_arm(world: World, arm: Arm) -> dict[str, Any]:
     return {
         "name": arm.name,
         "model": arm.model,
+        "home": arm.description.home_choice.clause if arm.description.home_choice else "",
         "pose": to_wire(arm.pose),
         "joint_names": list(arm.joint_names),
         "lower": to_wire(lower),

@@ -31,7 +31,7 @@ def check_fleet(
 ) -> None:
     """Raise :class:`SpecError` at the first arm that cannot be brought up as specified."""
     models = models or ModelLibrary()
-    available = models.names
+    available = models.available
     limits: dict[str, ArmKinematics] = {}
     seen: dict[str, ArmSpec] = {}
     for arm, entry, field in arms:
@@ -49,16 +49,21 @@ def check_fleet(
             fail("name", f"arm name {arm.name!r} is used twice; names must be unique")
         if is_model_file(arm.model):
             try:
-                models.path(arm.model, dict(arm.xacro_args))  # read and expanded once here
+                models.path(arm.model, options=arm.options)  # read and expanded once here
             except ArmfleetError as exc:
                 fail("model", str(exc))
         elif arm.model not in available:
             fail("model", f"model {arm.model!r} not found; available: {', '.join(available)}")
+        else:
+            try:
+                models.path(arm.model, options=arm.options)  # one's own: its settings read
+            except ArmfleetError as exc:
+                fail("model", str(exc))
         seen[arm.name] = arm
         if arm.initial_positions is not None:
-            key = f"{arm.model} {arm.xacro_args}"
+            key = f"{arm.model} {arm.options}"
             if key not in limits:
-                description = models.expand(arm.model, "", xacro_args=dict(arm.xacro_args))
+                description = models.expand(arm.model, "", options=arm.options)
                 limits[key] = ArmKinematics(description.urdf, description.tool0)
             kinematics = limits[key]
             chain = kinematics.arm_indices

@@ -6,6 +6,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from armfleet.description.model_options import ModelOptions
+from armfleet.errors import ArmfleetError
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.objects.object_spec import ObjectSpec
 
@@ -29,12 +31,15 @@ class ArmSpec:
 
     Attributes:
         name: arm name, namespace and prefix.
-        model: one of the models in ``description/``, or a model file (an absolute path
+        model: one of the models in ``description/``, a named model of one's own
+            (:mod:`armfleet.description.own_models`), or a model file (an absolute path
             or a ``package://`` URI; see :mod:`armfleet.description.file_model`).
         pose: spawn pose of ``<name>_base_link``.
         initial_positions: arm joint positions at spawn [rad or m]; the model's home if None.
         controllers: per controller type (``position_controller``, ...), its configuration.
-        xacro_args: ``(name, value)`` arguments of a xacro model file.
+        options: what is said about a model file: its xacro arguments, tool link,
+            gripper joints, home, end effector
+            (:class:`~armfleet.description.model_options.ModelOptions`).
     """
 
     name: str
@@ -42,7 +47,19 @@ class ArmSpec:
     pose: SpawnPose = field(default_factory=SpawnPose)
     initial_positions: tuple[float, ...] | None = None
     controllers: Mapping[str, ControllerConfig] = field(default_factory=dict)
-    xacro_args: tuple[tuple[str, str], ...] = ()
+    options: ModelOptions = field(default_factory=ModelOptions)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.options, ModelOptions):  # the xacro_args tuple it replaced
+            raise ArmfleetError(
+                f"ArmSpec {self.name!r}: options must be an armfleet.description.model_options"
+                f".ModelOptions, got {type(self.options).__name__}"
+            )
+
+    @property
+    def xacro_args(self) -> tuple[tuple[str, str], ...]:
+        """``(name, value)`` arguments of a xacro model file (``options.xacro_args``)."""
+        return self.options.xacro_args
 
 
 @dataclass(frozen=True)

@@ -103,7 +103,7 @@ class SceneRehearsal:
             {name: c.parameters for name, c in arm.controllers.items()},
             {name: c.file for name, c in arm.controllers.items() if c.file},
         )
-        description = self._models.expand(arm.model, f"{arm.name}_", pose, dict(arm.xacro_args))
+        description = self._models.expand(arm.model, f"{arm.name}_", pose, options=arm.options)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(arm.name, kinematics, description.home, arm.initial_positions)
         self._frames.claim(FrameOwner.arm(arm.name), arm_frames(kinematics))

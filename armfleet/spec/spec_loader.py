@@ -5,7 +5,8 @@ Format (all keys but ``name`` and ``model`` optional; units in the key names)::
     world: {dt_s: 0.001, gravity_m_s2: 9.81, realtime: true, viewer: true}
     arms:
       - name: bob
-        model: panda
+        model: panda               # or my_arm (one's own), or {file: arm.urdf.xacro,
+                                   # xacro_args, tool_link, gripper_joints, home, end_effector}
         at_m: [0, 0, 0]            # x, y[, z] of <name>_base_link [m]
         yaw_deg: 0                 # or yaw_rad, rpy_deg: [r, p, y], rpy_rad
         initial_positions: [...]   # arm joints [rad or m]; the model's home if absent
@@ -38,7 +39,8 @@ from armfleet.controllers.parameters import check_parameter
 from armfleet.controllers.registry import CONTROLLER_TYPES
 from armfleet.description import ModelLibrary
 from armfleet.description.data_folders import data_dir
-from armfleet.errors import ParameterError
+from armfleet.description.model_options import SETTING_KEYS, ModelOptions, parse_model_options
+from armfleet.errors import ModelSettingError, ParameterError
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.spec.fleet_checks import check_fleet
 from armfleet.spec.fleet_spec import ArmSpec, ControllerConfig, FleetSpec, WorldSpec
@@ -50,8 +52,8 @@ from armfleet.spec.spec_reader import SpecReader
 TOP_KEYS = ("world", "arms", "grid", "objects", "sweep")
 WORLD_KEYS = ("dt_s", "gravity_m_s2", "realtime", "viewer")
 ORIENTATION_KEYS = ("yaw_deg", "yaw_rad", "rpy_deg", "rpy_rad")
-#: Keys of a ``model:`` that names a file.
-MODEL_FILE_KEYS = ("file", "xacro_args")
+#: Keys of a ``model:`` that names a file: ``file`` and its settings.
+MODEL_FILE_KEYS = ("file", *SETTING_KEYS)
 ARM_KEYS = ("name", "model", "at_m", "initial_positions", "controllers", *ORIENTATION_KEYS)
 GRID_KEYS = ("rows", "columns", "spacing_m", "model", "origin_m", "controllers", "yaw_deg")
 CONTROLLER_KEYS = ("file", "parameters")
@@ -148,7 +150,7 @@ def _world(reader: SpecReader, top: LocatedDict) -> WorldSpec:
 def _arm(reader: SpecReader, entry: LocatedDict, field: str, base_dir: Path | None) -> ArmSpec:
     reader.only_keys(entry, field, ARM_KEYS)
     name = reader.text(entry, "name", field)
-    model, xacro_args = _model(reader, entry, field, base_dir)
+    model, options = _model(reader, entry, field, base_dir)
     at = reader.numbers(entry, "at_m", field, (2, 3), "m") if "at_m" in entry else (0.0, 0.0)
     roll, pitch, yaw = _orientation(reader, entry, field)
     initial = None
@@ -156,16 +158,17 @@ def _arm(reader: SpecReader, entry: LocatedDict, field: str, base_dir: Path | No
         initial = reader.numbers(entry, "initial_positions", field, range(1, 64), "rad or m")
     pose = SpawnPose(*at, yaw_deg=yaw, roll_deg=roll, pitch_deg=pitch)  # type: ignore[misc]
     controllers = _controllers(reader, entry, field, base_dir)
-    return ArmSpec(name, model, pose, initial, controllers, xacro_args)
+    return ArmSpec(name, model, pose, initial, controllers, options)
 
 
 def _model(
     reader: SpecReader, entry: LocatedDict, field: str, base_dir: Path | None
-) -> tuple[str, tuple[tuple[str, str], ...]]:
-    """``model: panda`` (a shipped model), or ``model: {file: arm.urdf.xacro, xacro_args:
-    {...}}`` (a file relative to the spec, or a ``package://`` URI)."""
+) -> tuple[str, ModelOptions]:
+    """``model: panda`` (a shipped model or one's own), or ``model: {file: arm.urdf.xacro,
+    xacro_args: {...}, tool_link: ..., ...}`` (a file relative to the spec, or a
+    ``package://`` URI, and its settings: :mod:`armfleet.description.model_options`)."""
     if "model" not in entry or not isinstance(entry["model"], LocatedDict):
-        return reader.text(entry, "model", field), ()
+        return reader.text(entry, "model", field), ModelOptions()
     where = f"{field}.model"
     given = reader.mapping(entry["model"], where, entry.line_of("model"))
     reader.only_keys(given, where, MODEL_FILE_KEYS)
@@ -175,18 +178,12 @@ def _model(
         if not path.is_absolute() and base_dir is not None:
             path = base_dir / path
         file = str(path.absolute())
-    arguments: list[tuple[str, str]] = []
-    if "xacro_args" in given:
-        values = reader.mapping(given["xacro_args"], f"{where}.xacro_args", given.line)
-        for key in values:
-            value = values[key]
-            if not isinstance(value, (str, int, float, bool)):
-                raise reader.error(
-                    values.line_of(key), f"{where}.xacro_args.{key}", "expected text or a number"
-                )
-            text = str(value).lower() if isinstance(value, bool) else str(value)
-            arguments.append((str(key), text))
-    return file, tuple(sorted(arguments))
+    try:
+        options = parse_model_options(given, where, base_dir, other_keys=("file",))
+    except ModelSettingError as exc:
+        key = exc.key.split(".")[0]
+        raise reader.error(given.line_of(key), f"{where}.{exc.key}", exc.problem) from None
+    return file, options
 
 
 def _orientation(reader: SpecReader, entry: LocatedDict, field: str) -> tuple[float, float, float]:

@@ -87,7 +87,8 @@ def task_reference(text: str, base_dir: Path | None = None) -> TaskReference:
     head, _, function = text.rpartition(":") if ":" in text else (text, "", "")
     if head.endswith(".py") or text.endswith(".py"):
         path_text = head if head.endswith(".py") else text
-        function = function if head.endswith(".py") else DEFAULT_FUNCTION
+        named = ":" in text and head.endswith(".py")  # file.py:function, else file.py
+        function = function if named else DEFAULT_FUNCTION
         path = Path(path_text).expanduser()
         if not path.is_absolute() and base_dir is not None and (base_dir / path).exists():
             path = base_dir / path

@@ -26,7 +26,7 @@ def spawn_from_spec(world: World, arm: ArmSpec) -> Arm:
         initial_positions=arm.initial_positions,
         parameters={name: c.parameters for name, c in arm.controllers.items()},
         parameter_files={name: c.file for name, c in arm.controllers.items() if c.file},
-        xacro_args=dict(arm.xacro_args),
+        **arm.options.keywords(),
     )
 
 

@@ -28,6 +28,7 @@ from armfleet.checks.real_numbers import real_number
 from armfleet.checks.time_step import check_dt
 from armfleet.controllers.fleet_update import FleetUpdate
 from armfleet.description import ModelLibrary
+from armfleet.description.model_options import options_from_keywords
 from armfleet.errors import ArmfleetError, NameInUse, UnknownArm, WorldClosed
 from armfleet.frames.frame_registry import FrameOwner, FrameRegistry, arm_frames
 from armfleet.frames.spawn_pose import SpawnPose
@@ -389,6 +390,10 @@ class World:
         parameters: ControllerOverrides | None = None,
         parameter_files: Mapping[str, str | Path] | None = None,
         xacro_args: Mapping[str, str] | None = None,
+        tool_link: str | None = None,
+        gripper_joints: Sequence[str] | None = None,
+        home: Positions | None = None,
+        end_effector: Mapping[str, Any] | str | None = None,
     ) -> Arm:
         """Bring an arm up, stage by stage, and return it once ready.
 
@@ -398,10 +403,11 @@ class World:
 
         Args:
             name: arm name (``^[a-z][a-z0-9_]*$``), its namespace and prefix.
-            model: one of :attr:`models` ``.names``, or a robot description of your own: a
-                ``.urdf`` or ``.urdf.xacro`` file (relative to the working folder) or a
-                ``package://pkg/path`` URI, prefixed and placed for you
-                (:mod:`armfleet.description.file_model`; docs/own-robot.md).
+            model: one of :attr:`models` ``.names``, a named model of your own
+                (``.available``; :mod:`armfleet.description.own_models`), or a robot
+                description of your own: a ``.urdf`` or ``.urdf.xacro`` file (relative to
+                the working folder) or a ``package://pkg/path`` URI, prefixed and placed
+                for you (:mod:`armfleet.description.file_model`; docs/own-robot.md).
             at: ``(x, y[, z[, yaw_deg]])`` of ``<name>_base_link`` [m, deg].
             initial_positions: arm joint positions at spawn; the model's home by default.
             parameters: per-controller parameter overrides for this arm only,
@@ -409,6 +415,13 @@ class World:
             parameter_files: per-controller parameter file for this arm; the
                 shipped ``controllers/<type>.yaml`` by default.
             xacro_args: arguments of a xacro model file (``{"ur_type": "ur5e"}``).
+            tool_link, gripper_joints, home, end_effector: what a model file does not
+                say, or says otherwise than you mean (inferred if None): the link
+                ``<name>_tool0`` is put on; the gripper's joints; one home value per arm
+                joint [rad or m], clear of the arm itself and the floor; a gripper
+                description attached at a link (``{"file": ..., "at_link": "tool0",
+                "xacro_args": {...}}``). See
+                :mod:`armfleet.description.model_options`.
 
         Raises:
             StartPoseCollision: at its start configuration the arm would touch
@@ -422,12 +435,15 @@ class World:
         self._check_name_free(name, "an object" if name in self._objects else "")
         pose = SpawnPose.from_values(at)
         files = check_controller_parameters(parameters or {}, parameter_files or {})
-        if xacro_args is not None and not isinstance(xacro_args, Mapping):
-            raise ArmfleetError(
-                f"xacro_args takes a mapping {{name: value}}, got {type(xacro_args).__name__}"
-            )
-        arguments = {str(k): str(v) for k, v in (xacro_args or {}).items()}
-        description = self._models.expand(model, f"{name}_", pose, arguments)
+        options = options_from_keywords(
+            "spawn",
+            xacro_args=xacro_args,
+            tool_link=tool_link,
+            gripper_joints=gripper_joints,
+            home=home,
+            end_effector=end_effector,
+        )
+        description = self._models.expand(model, f"{name}_", pose, options=options)
         kinematics = ArmKinematics(description.urdf, description.tool0)
         start = start_positions(name, kinematics, description.home, initial_positions)
         frames = arm_frames(kinematics)

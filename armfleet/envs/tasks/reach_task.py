@@ -7,13 +7,19 @@ gets one target drawn with the episode's generator
 random joint configuration clear of the limits, the floor and the arm itself).
 Reward: minus the sum over arms of tool0's distance to its target's position [m] (dense);
 success once every tool0 is within ``tolerance_m`` of its target's position.
+``model`` makes the row of another arm: a shipped model, one's own by name, or a model
+file (docs/own-robot.md), all its joints driven as a Panda's.
 """
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 from gymnasium import spaces
 
+from armfleet.checks.model_reference import is_model_file
 from armfleet.checks.real_numbers import real_number
 from armfleet.envs.errors import InvalidOption
 from armfleet.envs.observations import pose_space
@@ -32,14 +38,18 @@ MAX_ARMS = 8
 
 
 class ReachTask(Task):
-    """N Pandas reach random targets (see the module docstring).
+    """N arms (Pandas by default) reach random targets (see the module docstring).
 
     Args:
-        arm_count: Pandas in the row, 1 to :data:`MAX_ARMS`.
+        arm_count: arms in the row, 1 to :data:`MAX_ARMS`.
         spacing_m: distance between neighbouring bases [m], in [0.5, 5].
         tolerance_m: a target is reached within this distance [m], in (0, 0.5].
         limit_margin: fraction of each joint's range the drawn configurations keep clear.
         min_tool_height_m: lowest tool0 height of a target [m].
+        model: the arms' model (``panda`` by default): a shipped model, one's own by name,
+            or a model file's path (made absolute here: episodes and vector workers read
+            the same file) or ``package://`` URI. An unknown model or a bad file is refused
+            when the environment is made.
     """
 
     def __init__(
@@ -49,6 +59,7 @@ class ReachTask(Task):
         tolerance_m: float = 0.02,
         limit_margin: float = 0.1,
         min_tool_height_m: float = 0.1,
+        model: str | os.PathLike[str] = MODEL,
     ) -> None:
         if isinstance(arm_count, bool) or not isinstance(arm_count, int | np.integer):
             raise InvalidOption("arm_count", arm_count, f"a whole number in [1, {MAX_ARMS}]")
@@ -64,6 +75,7 @@ class ReachTask(Task):
         self.limit_margin = limit_margin
         self.min_tool_height_m = min_tool_height_m
         self.arms = tuple(f"arm{i}" for i in range(self.arm_count))
+        self.model = _model_reference(model)
         self._targets: dict[str, FloatArray] = {}
 
     @property
@@ -72,7 +84,7 @@ class ReachTask(Task):
 
     def spec(self) -> FleetSpec:
         arms = tuple(
-            ArmSpec(name, MODEL, SpawnPose(x=i * self.spacing_m, yaw_deg=FACING_DEG))
+            ArmSpec(name, self.model, SpawnPose(x=i * self.spacing_m, yaw_deg=FACING_DEG))
             for i, name in enumerate(self.arms)
         )
         return FleetSpec(WorldSpec(realtime=False, viewer=False), arms, source="reach task")
@@ -112,3 +124,16 @@ class ReachTask(Task):
         distances = self.distances(world)
         success = all(d <= self.tolerance_m for d in distances.values())
         return Evaluation(-sum(distances.values()), success, {"distance_m": distances})
+
+
+def _model_reference(model: object) -> str:
+    """``model`` as a spec names it: a model file's path made absolute."""
+    if isinstance(model, os.PathLike):
+        model = os.fspath(model)
+    if not isinstance(model, str) or not model:
+        raise InvalidOption(
+            "model", model, "a shipped model's name (armfleet models), or a model file's path"
+        )
+    if is_model_file(model) and not model.startswith("package://"):
+        return str(Path(model).expanduser().absolute())
+    return model
