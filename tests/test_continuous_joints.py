@@ -19,6 +19,7 @@ import armfleet
 from armfleet.errors import JointLimitError
 from armfleet.messages import FloatArray, JointState
 from armfleet.recording import open_recording
+from armfleet.scenarios.reach_targets import draw_targets
 from tests.test_own_robot import (
     MOVE_RAD,
     POSE_TOLERANCE,
@@ -261,3 +262,30 @@ def test_a_continuous_joint_without_a_limit_element_turns_on(tmp_path: Path) -> 
         target = np.array([2 * math.pi + 1.0, 0.5])
         _go(world, bob, target)
         _frames_agree(world, bob)
+
+
+def test_reach_with_a_jaco_draws_targets_within_a_turn_and_passes_gymnasiums_checker() -> None:
+    """The Reach task draws a continuous joint's target angle from one turn, [-pi, pi]
+    (from -inf..inf it drew NaN), and absolute joint actions are bounded the same way."""
+    gym = pytest.importorskip("gymnasium")
+    from gymnasium.utils.env_checker import check_env
+
+    import armfleet.envs  # noqa: F401  (registers the armfleet/ environments)
+
+    env = gym.make("armfleet/Reach-v0", arm_count=1, model=str(JACO), action_kind="joint_positions")
+    try:
+        check_env(env.unwrapped, skip_render_check=True)
+        env.reset(seed=3)
+        arm = env.unwrapped.world.arm("arm0")
+        continuous = arm.kinematics.continuous[arm.kinematics.arm_indices]
+        assert continuous.sum() == 3
+        box = env.action_space["arm0"]["joint_positions"]
+        assert np.all(box.low[continuous] == np.float32(-np.pi))
+        assert np.all(box.high[continuous] == np.float32(np.pi))
+        assert np.all(np.isfinite(box.low)) and np.all(np.isfinite(box.high))
+        assert np.all(np.isfinite(env.unwrapped.task.targets["arm0"]))  # a tool0 pose
+        for target in draw_targets(arm, np.random.default_rng(5), 5):
+            positions = target.positions
+            assert np.all(np.isfinite(positions)) and np.all(np.abs(positions[continuous]) <= np.pi)
+    finally:
+        env.close()

@@ -252,6 +252,12 @@ BAD_URDF = "<robot name='x'>{}</robot>"
             "no_such_package",
             id="an unresolvable $(find)",
         ),
+        pytest.param(
+            "arm.urdf",
+            "<robot>" + " " * 10_000_000 + "</robot>",
+            "too large for a robot description",
+            id="a file over 10 MB",
+        ),
     ],
 )  # fmt: skip
 def test_a_bad_file_is_one_line_and_the_world_is_untouched(
@@ -337,3 +343,22 @@ def test_a_vendor_arm_plans_around_a_box_in_its_way_without_touching_it() -> Non
         assert np.abs(bob.positions - goal).max() < TRACKING_RAD
         assert bob.mode is armfleet.ArmMode.HOLDING
         assert world.contacts.total_contacts == contacts_before
+
+
+def test_a_find_cycle_is_one_line_naming_the_files(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file that includes itself through ``$(find)`` of its own package."""
+    package = tmp_path / "loop_description"
+    _write(package / "package.xml", "<package><name>loop_description</name></package>")
+    arm = _write(
+        package / "urdf" / "arm.urdf.xacro",
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro">'
+        '<xacro:include filename="$(find loop_description)/urdf/arm.urdf.xacro"/></robot>',
+    )
+    monkeypatch.setenv("ARMFLEET_PACKAGE_PATH", str(tmp_path))
+    with armfleet.World() as world, pytest.raises(DescriptionError) as caught:
+        world.spawn("bob", model=str(arm))
+    message = str(caught.value)
+    assert "include cycle" in message and "arm.urdf.xacro" in message, message
+    assert "\n" not in message

@@ -33,8 +33,10 @@ def naming_include_cycle(path: Path) -> Iterator[None]:
         yield
     except DescriptionError as error:
         cause = error.__cause__ or error.__context__
+        # Through $(find), xacro wraps the RecursionError in an error of its own.
+        recursed = isinstance(cause, RecursionError) or "maximum recursion depth" in str(error)
         cycle = include_cycle(getattr(xacro, "filestack", None) or [])
-        if not isinstance(cause, RecursionError) or cycle is None:
+        if not recursed or cycle is None:
             raise
         first = cycle[0]
         chain = " -> ".join(Path(name).name for name in cycle)

@@ -32,6 +32,7 @@ from armfleet.arms.arm import Arm
 from armfleet.checks.real_numbers import all_real
 from armfleet.envs.choices import choose
 from armfleet.envs.errors import InvalidAction, InvalidOption
+from armfleet.kinematics.continuous_joints import one_turn_bounds
 from armfleet.messages import FloatArray
 
 GRIPPER = "gripper"
@@ -80,7 +81,7 @@ def arm_action_space(arm: Arm, kind: ActionKind, limits: StepLimits) -> spaces.D
     """The action space of ``arm`` for ``kind``."""
     count = len(arm.joint_names)
     if kind is ActionKind.JOINT_POSITIONS:
-        lower, upper = arm.joint_limits
+        lower, upper = one_turn_bounds(*arm.joint_limits)  # a continuous joint: one turn
         main = spaces.Box(lower.astype(np.float32), upper.astype(np.float32), dtype=np.float32)
     elif kind is ActionKind.JOINT_DELTAS:
         main = spaces.Box(-limits.joint_rad, limits.joint_rad, (count,), dtype=np.float32)

@@ -68,3 +68,10 @@ def nearest_turn(
     offset = result[continuous] - reference[continuous]
     result[continuous] = reference[continuous] + (offset + np.pi) % (2.0 * np.pi) - np.pi
     return result
+
+
+def one_turn_bounds(lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Finite bounds to draw positions from: the limits, and [-pi, pi] (one whole turn)
+    for a joint with none. New arrays."""
+    bounded = np.isfinite(lower) & np.isfinite(upper)
+    return np.where(bounded, lower, -np.pi), np.where(bounded, upper, np.pi)

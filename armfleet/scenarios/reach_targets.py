@@ -28,6 +28,7 @@ import pybullet as p
 from armfleet.arms.arm import Arm
 from armfleet.checks.real_numbers import real_number
 from armfleet.errors import ArmfleetError
+from armfleet.kinematics.continuous_joints import one_turn_bounds
 from armfleet.messages import FloatArray
 from armfleet.physics.arm_body import ArmBody
 from armfleet.physics.contact_monitor import GROUND
@@ -144,7 +145,7 @@ def draw_targets(
             return draw_targets(
                 arm, rng, count, limit_margin=margin, min_tool_height_m=height, probe=own
             )
-    lower, upper = arm.joint_limits
+    lower, upper = one_turn_bounds(*arm.joint_limits)  # a continuous joint: one turn
     span = upper - lower
     low, high = lower + margin * span, upper - margin * span
     targets: list[Target] = []
