@@ -157,7 +157,7 @@ def _garbage_dae(folder: Path) -> tuple[Path, str]:
 
 def _dae_without_geometry(folder: Path) -> tuple[Path, str]:
     # PyBullet 3.2 crashes (segmentation fault) on this one: it must never get it.
-    _write(folder / "meshes" / "hollow.dae", _collada(None, with_geometry=False))
+    _write(folder / "meshes" / "hollow.dae", collada_cube(None, with_geometry=False))
     path = _write(folder / "arm.urdf", _arm(_mesh_link("meshes/hollow.dae")))
     return path, "hollow.dae' is a COLLADA file with no mesh geometry"
 
@@ -211,7 +211,7 @@ def test_a_bad_description_is_one_line_from_check_model_and_refused_at_spawn(
         assert bob.joint_names[0].startswith("bob_")
 
 
-def _collada(unit_m: float | None, with_geometry: bool = True) -> str:
+def collada_cube(unit_m: float | None, with_geometry: bool = True) -> str:
     """A cube of side 1 (file units), centred on its origin, as COLLADA."""
     corners = [(x, y, z) for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)]
     faces = "0 1 3 0 3 2 4 6 7 4 7 5 0 4 5 0 5 1 2 3 7 2 7 6 0 2 6 0 6 4 1 5 7 1 7 3"
@@ -249,7 +249,7 @@ def _collada(unit_m: float | None, with_geometry: bool = True) -> str:
 def test_a_scaled_dae_mesh_collides_at_its_scaled_size(
     tmp_path: Path, unit_m: float | None, scale: str, size: tuple[float, float, float]
 ) -> None:
-    _write(tmp_path / "meshes" / "cube.dae", _collada(unit_m))
+    _write(tmp_path / "meshes" / "cube.dae", collada_cube(unit_m))
     path = _write(tmp_path / "arm.urdf", _arm(_mesh_link("meshes/cube.dae", scale)))
     with armfleet.World() as world:
         arm = world.spawn("bob", model=str(path), at=(0.0, 0.0))

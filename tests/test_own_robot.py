@@ -11,11 +11,13 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import pybullet as p
 import pytest
 
 import armfleet
 from armfleet.description import ModelLibrary
 from armfleet.errors import DescriptionError, PackageNotFound
+from tests.test_check_model import collada_cube
 
 ROBOTS = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix/share/example-robot-data/robots"
 #: Vendors' fixed-base arms as example-robot-data ships them, loaded with no wrapper.
@@ -362,3 +364,129 @@ def test_a_find_cycle_is_one_line_naming_the_files(
     message = str(caught.value)
     assert "include cycle" in message and "arm.urdf.xacro" in message, message
     assert "\n" not in message
+
+
+@pytest.fixture
+def hard_parts(workspace: Path) -> Path:
+    """The workspace with every hard part together in one more arm and a gripper package:
+    ``my_turning_arm.urdf.xacro`` (a continuous base joint, a link drawn and collided with
+    a COLLADA cube in centimetres, scaled by the URDF to 0.2 x 0.2 x 0.1 m, the joint
+    limits from ``xacro.load_yaml``, ``my_parts``' macro through ``$(find)``, a
+    ``<ros2_control>`` block, no tool0), and ``my_gripper_description`` (two prismatic
+    fingers, the second a ``<mimic>`` of the first, their travel a xacro argument)."""
+    _write(workspace / "my_parts" / "meshes" / "cube.dae", collada_cube(0.01))
+    arm = workspace / "my_arm_description" / "urdf" / "my_turning_arm.urdf.xacro"
+    _write(
+        arm,
+        """
+        <?xml version="1.0"?>
+        <robot name="my_turning_arm" xmlns:xacro="http://www.ros.org/wiki/xacro">
+          <xacro:property name="limits"
+              value="${xacro.load_yaml('$(find my_arm_description)/config/limits.yaml')}"/>
+          <xacro:include filename="$(find my_parts)/urdf/parts.xacro"/>
+          <link name="base">
+            <visual><geometry>
+              <mesh filename="package://my_parts/meshes/cube.dae" scale="20 20 10"/>
+            </geometry></visual>
+            <collision><geometry>
+              <mesh filename="package://my_parts/meshes/cube.dae" scale="20 20 10"/>
+            </geometry></collision>
+            <inertial><mass value="3"/>
+              <inertia ixx="0.03" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.03"/></inertial>
+          </link>
+          <xacro:three_links p=""/>
+          <joint name="turn" type="continuous">
+            <parent link="base"/><child link="link1"/><origin xyz="0 0 0.05"/>
+            <axis xyz="0 0 1"/><limit effort="${limits['effort']}" velocity="2.0"/>
+          </joint>
+          <joint name="shoulder" type="revolute">
+            <parent link="link1"/><child link="link2"/><origin xyz="0 0 0.3"/>
+            <axis xyz="0 1 0"/>
+            <limit lower="${-limits['range']}" upper="${limits['range']}"
+                   effort="${limits['effort']}" velocity="${limits['velocity']}"/>
+          </joint>
+          <joint name="elbow" type="revolute">
+            <parent link="link2"/><child link="link3"/><origin xyz="0 0 0.3"/>
+            <axis xyz="0 1 0"/>
+            <limit lower="${-limits['range']}" upper="${limits['range']}"
+                   effort="${limits['effort']}" velocity="${limits['velocity']}"/>
+          </joint>
+          <ros2_control name="my_turning_arm" type="system">
+            <hardware><plugin>mock_components/GenericSystem</plugin></hardware>
+            <joint name="turn"><command_interface name="position"/></joint>
+          </ros2_control>
+        </robot>
+        """,
+    )
+    gripper = workspace / "my_gripper_description"
+    _write(gripper / "package.xml", "<package><name>my_gripper_description</name></package>")
+    palm = _box_link("palm", "0.1 0.1 0.02", 0.3, "0 0 0.01")
+    fingers = "".join(
+        _box_link(f"{side}_finger", "0.01 0.01 0.05", 0.05, "0 0 0.045") for side in "lr"
+    )
+    _write(
+        gripper / "urdf" / "gripper.urdf.xacro",
+        f"""
+        <?xml version="1.0"?>
+        <robot name="my_gripper" xmlns:xacro="http://www.ros.org/wiki/xacro">
+          <xacro:arg name="travel" default="0.04"/>{palm}{fingers}
+          <joint name="l_finger_joint" type="prismatic">
+            <parent link="palm"/><child link="l_finger"/><origin xyz="0.0 0 0.02"/>
+            <axis xyz="1 0 0"/>
+            <limit lower="0" upper="$(arg travel)" effort="20" velocity="0.2"/>
+          </joint>
+          <joint name="r_finger_joint" type="prismatic">
+            <parent link="palm"/><child link="r_finger"/><origin xyz="0.0 0 0.02"/>
+            <axis xyz="-1 0 0"/>
+            <limit lower="0" upper="$(arg travel)" effort="20" velocity="0.2"/>
+            <mimic joint="l_finger_joint" multiplier="1" offset="0"/>
+          </joint>
+        </robot>
+        """,
+    )
+    return arm
+
+
+def test_every_hard_part_together_by_path_with_an_end_effector(
+    workspace: Path, hard_parts: Path
+) -> None:
+    models = ModelLibrary(package_paths=[workspace])
+    effector = {
+        "file": "package://my_gripper_description/urdf/gripper.urdf.xacro",
+        "xacro_args": {"travel": "0.03"},
+    }
+    with armfleet.World(models=models) as world:
+        bob = world.spawn("bob", model=str(hard_parts), at=(0, 0), end_effector=effector)
+        toby = world.spawn("toby", model=str(hard_parts), at=(1.5, 0), end_effector=effector)
+        for arm in (bob, toby):
+            prefix = f"{arm.name}_"
+            assert arm.joint_names == tuple(prefix + j for j in ("turn", "shoulder", "elbow"))
+            assert arm.description.gripper_joints == (
+                f"{prefix}l_finger_joint",
+                f"{prefix}r_finger_joint",
+            )
+            assert "ros2_control" not in arm.description.urdf
+        # The continuous joint has no position limit; the others come from the YAML.
+        lower, upper = bob.joint_limits
+        assert lower[0] == -np.inf and upper[0] == np.inf
+        assert np.allclose(lower[1:], -2.5) and np.allclose(upper[1:], 2.5)
+        # No tool0 in the file: the arm's chain ends at link3, the gripper hangs there.
+        assert np.abs(world.tf.lookup("bob_link3", "bob_tool0") - np.eye(4)).max() < 1e-12
+        assert world.tf.lookup("bob_link3", "bob_palm")[2, 3] == pytest.approx(0.0)
+        # The COLLADA cube: 1 cm units, scaled 20 x 20 x 10 -> 0.2 x 0.2 x 0.1 m (+ margin).
+        low, high = p.getAABB(bob.body.body_id, -1, physicsClientId=world.physics_client)
+        assert np.subtract(high, low) == pytest.approx((0.202, 0.202, 0.102), abs=2e-3)
+        # The base turns on past pi; the gripper's travel (a xacro argument) is its width.
+        target = np.asarray(bob.positions)
+        target[0] = 4.0
+        bob.move_to(target)
+        bob.gripper.move_to(0.05)  # two fingers of 0.03 m travel: at most 0.06 m
+        world.run(4.0)
+        assert abs(bob.positions[0] - 4.0) < TRACKING_RAD
+        assert bob.gripper.max_width == pytest.approx(0.06)
+        assert bob.gripper.width == pytest.approx(0.05, abs=5e-4)
+        state = world.arm("bob").body.position
+        names = bob.kinematics.joint_names
+        left = state[names.index("bob_l_finger_joint")]
+        right = state[names.index("bob_r_finger_joint")]
+        assert abs(left - right) < 1e-4  # the mimic follows its leader
