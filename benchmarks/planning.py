@@ -15,20 +15,27 @@ Two worlds are made from the spec, headless:
   untimed request lets the planner build its scene for the new arms (as a running
   world does once when arms come or go; reported as ``scene_build_ms``), then the
   request is timed (``world.plan(targets)``: IK,
-  scene, search, simplification, proof of clearance, timing) and executed in PyBullet,
+  scene, search, simplification, proof of clearance, timing), in wall time and in CPU
+  time of the process (``time.process_time``: what the request cost, whatever else
+  the machine was doing), and executed in PyBullet,
   with every contact of an arm on ``/collisions`` counted (with the other arm, itself,
   the floor, the table, post and walls, and the movable cubes) and protective stops on.
   Each returned path is also re-checked independently of the planner: sampled every
   ``RECHECK_STEP_RAD`` against benchmarks/cell_model.py's model, without margin.
+  The motion's duration is the plan's (``plan.duration_s``, as executed), and the same
+  waypoints are timed rest to rest, segment by segment (``TimedPath``, the timing
+  before issue 27), for the comparison.
 - **straight**: for each problem, the arms are brought up again at its start (cubes
   put back where pushed), then the same targets go to straight ``world.move_together``;
   a collision is any contact of an arm (protective stops counted too).
 
 It prints a table per class (1 arm, 2 arms), the issue's targets with pass/miss and
-where the planning time goes, and writes benchmarks/results/planning.json.
+where the planning time goes, the comparison with VAMP (benchmarks/planning_report.py
+says which figures of VAMP's it uses), and writes benchmarks/results/planning.json.
 
-    python benchmarks/planning.py            # 200 problems (a few minutes)
-    python benchmarks/planning.py --short    # 4 problems (CI)
+    python benchmarks/planning.py               # 200 problems (a few minutes)
+    python benchmarks/planning.py --short       # 4 problems (CI)
+    python benchmarks/planning.py --budget 2000 # plans bounded by iterations, not time
 """
 
 from __future__ import annotations
@@ -50,17 +57,20 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from armfleet.planning.scene import BULLET_MARGIN_M
 from armfleet.messages import FloatArray
+from armfleet.planning.path_timing import JointLimits, TimedPath
 from armfleet.spec import FleetSpec, load_spec
 from cell_execution import ContactLog, respawn_at, run_until_still
 from cell_model import CellModel, Checker  # benchmarks/ is the script's folder
 from cell_problems import CellProblem, ProblemSet
-from planning_report import print_report, summarise, targets
+from planning_report import print_report, summarise, targets, vamp_comparison
 
 RESULTS = Path(__file__).resolve().parent / "results"
 SPEC = Path(__file__).resolve().parents[1] / "launch_specs" / "shared_cell.yaml"
-#: Margin of the problem set's starts and goals [m] (the planner's default clearance).
-PROBLEM_MARGIN_M = 0.01
+#: Margin of the problem set's starts and goals [m]: the planner's default clearance, plus
+#: the physics' collision margin of two meshes, which the planner keeps too.
+PROBLEM_MARGIN_M = 0.01 + 2 * BULLET_MARGIN_M
 #: Every this many problems, one has pose goals (the others joint goals).
 POSE_EVERY = 3
 #: Joint-space step of the independent re-check of returned paths [rad]; a Panda's
@@ -103,7 +113,8 @@ class Outcome:
         solved: a plan was returned.
         error: the failure's one line.
         reason: the :class:`~armfleet.planning.FailureReason` value, or "".
-        request_ms: wall time of ``world.plan`` [ms]; planner_ms: the plan's own
+        request_ms: wall time of ``world.plan`` [ms]; request_cpu_ms: the CPU time
+            of the process during it [ms]; planner_ms: the plan's own
             ``planning_time_s`` [ms].
         phases_ms: the plan's time per phase [ms].
         checks, samples, waypoints: what the plan cost and is.
@@ -112,6 +123,8 @@ class Outcome:
         recheck_touches: the independent re-check found a touching state.
         contact_steps, pairs, stops, deepest_mm: execution in PyBullet.
         tracking_error_rad: largest joint error at the end of the motion [rad].
+        duration_s: the plan's duration, as executed [s]; rest_to_rest_s: its
+            waypoints timed rest to rest, segment by segment [s].
         pose_error_mm, pose_error_deg: tool0 at the end against the pose goal.
         scene_build_ms: the untimed request after the arms were brought up at the
             start, in which the planner builds its scene for the new arms [ms].
@@ -129,6 +142,7 @@ class Outcome:
     error: str = ""
     reason: str = ""
     request_ms: float = 0.0
+    request_cpu_ms: float = 0.0
     planner_ms: float = 0.0
     phases_ms: dict[str, float] = field(default_factory=dict)
     checks: int = 0
@@ -142,6 +156,8 @@ class Outcome:
     stops: int = 0
     deepest_mm: float = 0.0
     tracking_error_rad: float | None = None
+    duration_s: float | None = None
+    rest_to_rest_s: float | None = None
     scene_build_ms: float = 0.0
     pose_error_mm: float | None = None
     pose_error_deg: float | None = None
@@ -201,7 +217,9 @@ def make_problems(world: armfleet.World, count: int, seed: int) -> tuple[Cell, l
     return Cell(model), problems
 
 
-def planned_pass(spec: FleetSpec, cell: Cell, problems: list[CellProblem]) -> list[Outcome]:
+def planned_pass(
+    spec: FleetSpec, cell: Cell, problems: list[CellProblem], limit: dict[str, Any]
+) -> list[Outcome]:
     """Plan and execute every problem in one world; see the module's docstring."""
     outcomes = []
     world = armfleet.launch(spec, viewer=False)
@@ -232,7 +250,7 @@ def planned_pass(spec: FleetSpec, cell: Cell, problems: list[CellProblem]) -> li
                 continue
             log.take()
             outcome.attempted = True
-            plan_and_execute(world, log, cell, problem, targets, outcome)
+            plan_and_execute(world, log, cell, problem, targets, outcome, limit)
             if (problem.index + 1) % 25 == 0:
                 print(f"  planned {problem.index + 1}/{len(problems)}", flush=True)
     finally:
@@ -247,19 +265,26 @@ def plan_and_execute(
     problem: CellProblem,
     targets: dict[str, Any],
     outcome: Outcome,
+    limit: dict[str, Any],
 ) -> None:
-    began = time.perf_counter()
-    try:
-        plan = world.plan(targets)
-    except armfleet.PlanningFailed as exc:
+    """Time ``world.plan(targets, **limit)`` (wall and CPU), check and run its plan."""
+    began, cpu = time.perf_counter(), time.process_time()
+
+    def timed() -> None:
         outcome.request_ms = (time.perf_counter() - began) * 1e3
+        outcome.request_cpu_ms = (time.process_time() - cpu) * 1e3
+
+    try:
+        plan = world.plan(targets, **limit)
+    except armfleet.PlanningFailed as exc:
+        timed()
         outcome.error, outcome.reason = str(exc), exc.reason.value
         return
     except armfleet.ArmfleetError as exc:  # not a planning failure: kept, counted, shown
-        outcome.request_ms = (time.perf_counter() - began) * 1e3
+        timed()
         outcome.error, outcome.reason = str(exc), type(exc).__name__
         return
-    outcome.request_ms = (time.perf_counter() - began) * 1e3
+    timed()
     outcome.solved = True
     outcome.planner_ms = plan.planning_time_s * 1e3
     outcome.phases_ms = {k: round(v * 1e3, 4) for k, v in plan.seconds.items()}
@@ -269,6 +294,9 @@ def plan_and_execute(
     line = float(np.linalg.norm(plan.waypoints[-1] - plan.waypoints[0]))
     outcome.length_ratio = round(plan.length_rad / line, 4) if line > 0 else 1.0
     outcome.recheck_touches = cell.recheck(problem, plan.waypoints)
+    outcome.duration_s = round(plan.duration_s, 4)
+    rest_to_rest = TimedPath(plan.waypoints, joint_limits(world, plan.arms))
+    outcome.rest_to_rest_s = round(rest_to_rest.duration, 4)
     stops = world.safety.stops
     try:
         duration = world.execute(plan)
@@ -290,6 +318,18 @@ def plan_and_execute(
         outcome.pose_error_deg = max(
             float(np.degrees(np.linalg.norm(pin.log3(e.rotation)))) for e in errors
         )
+
+
+def joint_limits(world: armfleet.World, arms: tuple[str, ...]) -> JointLimits:
+    """The planned joints' velocity, acceleration and jerk limits (their controllers')."""
+    velocity, acceleration, jerk = [], [], []
+    for name in arms:
+        controller = world.arm(name).position_controller
+        n = controller.lower.size
+        velocity.append(controller.max_velocity)
+        acceleration.append(np.full(n, float(controller.parameters["max_acceleration_rad_s2"])))
+        jerk.append(np.full(n, float(controller.parameters["max_jerk_rad_s3"])))
+    return JointLimits(np.concatenate(velocity), np.concatenate(acceleration), np.concatenate(jerk))
 
 
 def straight_pass(spec: FleetSpec, cell: Cell, problems: list[CellProblem]) -> list[Straight]:
@@ -343,7 +383,7 @@ def source_version() -> dict[str, Any]:
     }
 
 
-def run(count: int, seed: int) -> dict[str, Any]:
+def run(count: int, seed: int, budget: int | None = None) -> dict[str, Any]:
     spec = load_spec(SPEC)
     load_before = os.getloadavg()[0]
     world = armfleet.launch(spec, viewer=False)
@@ -354,7 +394,8 @@ def run(count: int, seed: int) -> dict[str, Any]:
     finally:
         world.close()
     started = time.perf_counter()
-    outcomes = planned_pass(spec, cell, problems)
+    limit: dict[str, Any] = {"timeout_s": 1.0} if budget is None else {"budget": budget}
+    outcomes = planned_pass(spec, cell, problems, limit)
     planned_s = time.perf_counter() - started
     started = time.perf_counter()
     for outcome, straight in zip(outcomes, straight_pass(spec, cell, problems), strict=True):
@@ -370,7 +411,7 @@ def run(count: int, seed: int) -> dict[str, Any]:
             "problems": count,
             "seed": seed,
             "pose_goals_every": POSE_EVERY,
-            "timeout_s": 1.0,
+            **limit,
             "clearance_m": 0.01,
             "recheck_step_rad": RECHECK_STEP_RAD,
             "recheck_us_per_state": round(
@@ -384,6 +425,7 @@ def run(count: int, seed: int) -> dict[str, Any]:
         },
         "classes": classes,
         "targets": targets(classes),
+        "vamp": vamp_comparison(classes),
         "problems": records,
     }
 
@@ -393,11 +435,15 @@ def main() -> None:
     parser.add_argument("--short", action="store_true", help="4 problems (CI)")
     parser.add_argument("--problems", type=int, default=200, help="problems (default 200)")
     parser.add_argument("--seed", type=int, default=16)
+    parser.add_argument(
+        "--budget", type=int, default=None, metavar="N",
+        help="plan within N planner iterations (reproducible) instead of 1 s",
+    )  # fmt: skip
     parser.add_argument("--json", type=Path, default=RESULTS / "planning.json")
     args = parser.parse_args()
     if args.problems < 2:
         parser.error("--problems: at least 2 (one of each class)")
-    figures = run(4 if args.short else args.problems, args.seed)
+    figures = run(4 if args.short else args.problems, args.seed, args.budget)
     print_report(figures)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(figures, indent=1))

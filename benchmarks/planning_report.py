@@ -1,7 +1,17 @@
-"""The planning benchmark's figures per class of problems, issue 16's targets, and the table.
+"""The planning benchmark's figures per class of problems, issue 16's targets, the table,
+and the comparison with VAMP.
 
 Everything here works on the per-problem records that benchmarks/planning.py writes
 to its JSON, so a saved run can be summarised again.
+
+VAMP (``vamp-planner`` 0.6.4) does not build on this machine: its CMake downloads
+CPM.cmake and then ``kavrakilab/nigh`` from GitHub, and there is no network here
+(``pip install vamp-planner`` fails at "CMake configuration failed"). So the comparison
+uses its figures published in issue 27 (:data:`VAMP_PUBLISHED`), measured from outside
+on 100 single-Panda problems in a scene both planners represent exactly (a table, a
+five-board shelf, three posts, two balls; 300 requests), on this kind of 2-core machine:
+another problem set than the shared cell's, so the ratios compare orders of magnitude,
+not problem by problem. The report says so wherever it prints them.
 """
 
 from __future__ import annotations
@@ -38,6 +48,13 @@ def class_row(records: Sequence[Record]) -> dict[str, Any]:
     attempted = [r for r in records if r["attempted"]]
     solved = [r for r in attempted if r["solved"]]
     times = [r["request_ms"] for r in solved]
+    cpu = [r.get("request_cpu_ms", 0.0) for r in solved]
+    durations = [r["duration_s"] for r in solved if r.get("duration_s") is not None]
+    ratios = [
+        r["duration_s"] / r["rest_to_rest_s"]
+        for r in solved
+        if r.get("duration_s") is not None and r.get("rest_to_rest_s")
+    ]
     total_ms = sum(times)
     phase_sums = {k: sum(r["phases_ms"].get(k, 0.0) for r in solved) for k in PHASES}
     pose = [r for r in attempted if r["goal"] == "pose"]
@@ -57,6 +74,20 @@ def class_row(records: Sequence[Record]) -> dict[str, Any]:
             "median": _stat(times, 50),
             "p95": _stat(times, 95),
             "max": round(max(times), 3) if times else None,
+        },
+        "request_cpu_ms": {
+            "median": _stat(cpu, 50),
+            "p95": _stat(cpu, 95),
+            "max": round(max(cpu), 3) if cpu else None,
+        },
+        "duration_s": {
+            "median": _stat(durations, 50),
+            "rest_to_rest_median": _stat(
+                [r["rest_to_rest_s"] for r in solved if r.get("rest_to_rest_s")], 50
+            ),
+            # executed / rest to rest on the same waypoints: below 1 is shorter
+            "ratio_median": _stat(ratios, 50),
+            "ratio_max": round(max(ratios), 4) if ratios else None,
         },
         "planner_ms_median": _stat([r["planner_ms"] for r in solved], 50),
         "phase_ms_median": {
@@ -151,6 +182,78 @@ def targets(classes: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+#: VAMP's figures in issue 27: vamp-planner 0.6.4, plan + simplify, CPU time per problem,
+#: 100 single-Panda problems (300 requests) in its own scene; paths touching the real
+#: meshes re-checked in PyBullet every 1e-3 rad.
+VAMP_PUBLISHED: dict[str, Any] = {
+    "source": "published in issue 27 (vamp-planner 0.6.4 does not build here: its CMake "
+    "fetches CPM.cmake and kavrakilab/nigh from GitHub; no network)",
+    "problems": "100 single-Panda problems (300 requests), table + shelf + posts + balls",
+    "cpu_ms": {"median": 0.88, "p95": 4.14, "max": 7.65},
+    "solved": [300, 300],
+    "touching": [36, 100],
+    "two_arms_cpu_ms_median": 1.42,
+}
+
+
+def vamp_comparison(classes: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """armfleet's CPU time per request, solved and touching paths, beside VAMP's published
+    figures (:data:`VAMP_PUBLISHED`), with the ratios armfleet / VAMP."""
+    vamp = VAMP_PUBLISHED
+    one, two = classes.get("1 arm"), classes.get("2 arms")
+    ours: dict[str, Any] = {}
+    if one is not None:
+        cpu = one["request_cpu_ms"]
+        ours = {
+            "cpu_ms": cpu,
+            "solved": [one["solved"], one["attempted"]],
+            "touching": [one["recheck_touching_paths"], one["solved"]],
+            "cpu_ratio": {
+                k: None if cpu[k] is None else round(cpu[k] / vamp["cpu_ms"][k], 2)
+                for k in ("median", "p95", "max")
+            },
+        }
+    if two is not None and two["request_cpu_ms"]["median"] is not None:
+        median = two["request_cpu_ms"]["median"]
+        ours["two_arms_cpu_ms_median"] = median
+        ours["two_arms_cpu_ratio"] = round(median / vamp["two_arms_cpu_ms_median"], 2)
+    return {"vamp": vamp, "armfleet": ours}
+
+
+def print_vamp(comparison: dict[str, Any]) -> None:
+    """The comparison table, with where VAMP's figures come from."""
+    vamp, ours = comparison["vamp"], comparison["armfleet"]
+    if not ours:
+        return
+    print(
+        f"\nagainst VAMP, one Panda; VAMP's figures {vamp['source']}; its problems: "
+        f"{vamp['problems']} (not the shared cell's: compare orders of magnitude)"
+    )
+
+    def triple(d: dict[str, Any]) -> str:
+        return " / ".join("-" if d[k] is None else f"{d[k]:.2f}" for k in ("median", "p95", "max"))
+
+    def ratio(d: dict[str, Any]) -> str:
+        return " / ".join("-" if d[k] is None else f"{d[k]:.1f}x" for k in d)
+
+    rows = [
+        ("", "VAMP (plan + simplify)", "armfleet whole request", "armfleet / VAMP"),
+        ("CPU ms median / p95 / max", triple(vamp["cpu_ms"]), triple(ours["cpu_ms"]),
+         ratio(ours["cpu_ratio"])),
+        ("solved", "{}/{}".format(*vamp["solved"]), "{}/{}".format(*ours["solved"]), ""),
+        ("paths touching", "{}/{}".format(*vamp["touching"]), "{}/{}".format(*ours["touching"]),
+         ""),
+    ]  # fmt: skip
+    if "two_arms_cpu_ms_median" in ours:
+        rows.append(
+            ("two arms, CPU ms median", f"{vamp['two_arms_cpu_ms_median']} (Baxter)",
+             _ms(ours["two_arms_cpu_ms_median"]), f"{ours['two_arms_cpu_ratio']:.0f}x")
+        )  # fmt: skip
+    widths = [max(len(row[i]) for row in rows) for i in range(4)]
+    for row in rows:
+        print("  ".join(text.ljust(width) for text, width in zip(row, widths, strict=True)))
+
+
 def _ms(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f}"
 
@@ -160,6 +263,14 @@ def _table_rows(phases: Sequence[str]) -> list[tuple[str, Callable[[dict[str, An
 
     def request(r: dict[str, Any]) -> str:
         return " / ".join(_ms(r["request_ms"][k]) for k in ("median", "p95", "max"))
+
+    def cpu(r: dict[str, Any]) -> str:
+        return " / ".join(_ms(r["request_cpu_ms"][k]) for k in ("median", "p95", "max"))
+
+    def duration(r: dict[str, Any]) -> str:
+        d = r["duration_s"]
+        ratio = "-" if d["ratio_median"] is None else f"{d['ratio_median']:.2f}"
+        return f"{_round(d['median'])} / {_round(d['rest_to_rest_median'])} ({ratio})"
 
     def phase(name: str) -> Callable[[dict[str, Any]], str]:
         return lambda r: f"{_ms(r['phase_ms_median'][name])} ({r['time_share'][name] or 0:.0%})"
@@ -188,6 +299,7 @@ def _table_rows(phases: Sequence[str]) -> list[tuple[str, Callable[[dict[str, An
         ("  pose goals solved", lambda r: f"{r['pose_goal_solved']}/{r['pose_goal_problems']}"),
         ("  failures", lambda r: ", ".join(f"{k}: {v}" for k, v in r["failures"].items()) or "-"),
         ("request ms median / p95 / max", request),
+        ("request CPU ms median / p95 / max", cpu),
     ]  # fmt: skip
     rows += [(f"  {name} ms median (share)", phase(name)) for name in phases]
     rows += [
@@ -200,6 +312,7 @@ def _table_rows(phases: Sequence[str]) -> list[tuple[str, Callable[[dict[str, An
         ("length / straight line med / p95",
          lambda r: f"{r['length_ratio']['median']} / {r['length_ratio']['p95']}"),
         ("independent re-check: touching", lambda r: str(r["recheck_touching_paths"])),
+        ("executed s / rest-to-rest s med (ratio)", duration),
         ("execution: contacts (steps) / stops", execution),
         ("tracking error mrad med / max", tracking),
         ("pose error max mm / deg", pose_error),
@@ -217,9 +330,14 @@ def _round(value: float | None) -> str:
 def print_report(figures: dict[str, Any]) -> None:
     """The table (one column per class), then the targets with met / MISS."""
     settings, classes = figures["settings"], figures["classes"]
+    limit = (
+        f"budget {settings['budget']} iterations"
+        if "budget" in settings
+        else f"timeout {settings['timeout_s']} s"
+    )
     print(
         f"\nshared cell, {settings['problems']} problems (seed {settings['seed']}, every "
-        f"{settings['pose_goals_every']}rd with pose goals), timeout {settings['timeout_s']} s, "
+        f"{settings['pose_goals_every']}rd with pose goals), {limit}, "
         f"clearance {settings['clearance_m'] * 1e3:g} mm; machine load "
         f"{' -> '.join(map(str, settings['load_average_1min']))} (1 min, before -> after)"
     )
@@ -232,3 +350,5 @@ def print_report(figures: dict[str, Any]) -> None:
     print("\ntargets:")
     for target in figures["targets"]:
         print(f"  {'met ' if target['met'] else 'MISS'}  {target['target']}: {target['value']}")
+    if "vamp" in figures:
+        print_vamp(figures["vamp"])

@@ -336,6 +336,36 @@ BAD = [
         id="move-together --avoid-collisions --planning-timeout 1e308 -> refused",
     ),
     pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--avoid-collisions", "--budget", "0"],
+        ["argument --budget: '0' is invalid", "planner iterations, an integer in 1..1000000"],
+        id="move --avoid-collisions --budget 0 -> refused before anything is sent",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--avoid-collisions", "--budget", "2.5"],
+        ["argument --budget: '2.5' is not an integer"],
+        id="move --avoid-collisions --budget 2.5 -> refused before anything is sent",
+    ),
+    pytest.param(
+        [
+            "move",
+            "bob",
+            "--joints",
+            *AWAY,
+            "--avoid-collisions",
+            "--budget",
+            "9",
+            "--planning-timeout",
+            "1",
+        ],
+        ["--planning-timeout (wall time) and --budget (planner iterations) exclude each other"],
+        id="move --budget with --planning-timeout -> one or the other, nothing sent",
+    ),
+    pytest.param(
+        ["move", "bob", "--joints", *AWAY, "--budget", "100"],
+        ["--budget goes with --avoid-collisions"],
+        id="move --budget without --avoid-collisions -> refused, nothing sent",
+    ),
+    pytest.param(
         ["move", "bob", "--pose", "0.4", "0", "0.5", "--linear", "--avoid-collisions"],
         ["argument --avoid-collisions: not allowed with argument --linear"],
         id="move --pose --linear --avoid-collisions -> one or the other, nothing sent",
@@ -352,7 +382,7 @@ BAD = [
     ),
     pytest.param(
         ["move", "bob", "--joints", *IN_THE_FLOOR, "--avoid-collisions", "--wait"],
-        ["cannot plan bob: goal in collision: bob_panda_", " touches ground (clearance 10 mm)"],
+        ["cannot plan bob: goal in collision: bob_panda_", " touches ground (clearance 10 mm"],
         id="move --avoid-collisions to a goal in the floor -> the world's one line, no motion",
     ),
 ]

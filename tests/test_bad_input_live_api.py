@@ -259,6 +259,24 @@ CASES = [
         id="planned move_pose with a negative budget -> ProtocolError with the range",
     ),
     pytest.param(
+        lambda t: [req("move", planned(budget=0))],
+        "ProtocolError",
+        "move: 'budget' is 0; give planner iterations, an integer in 1..1000000",
+        id="planned move with a budget of 0 -> ProtocolError with the range",
+    ),
+    pytest.param(
+        lambda t: [req("move", planned(budget=100, timeout_s=1.0))],
+        "ProtocolError",
+        "move: give 'timeout_s' (wall time) or 'budget' (planner iterations), not both",
+        id="planned move with a budget and a timeout -> ProtocolError, one or the other",
+    ),
+    pytest.param(
+        lambda t: [req("move", {"name": "bob", "positions": AWAY, "budget": 100})],
+        "ProtocolError",
+        "move: 'budget' goes with 'avoid_collisions': true",
+        id="budget without avoid_collisions -> ProtocolError (not a straight move)",
+    ),
+    pytest.param(
         lambda t: [req("move", {"name": "bob", "positions": AWAY, "clearance_m": 0.05})],
         "ProtocolError",
         "move: 'clearance_m' goes with 'avoid_collisions': true",

@@ -151,7 +151,8 @@ def test_a_goal_in_collision_is_one_line_and_nothing_moves(bob_world: WorldProce
         before = client.arm("bob").positions
         pattern = re.compile(
             r"^armfleet: error: cannot plan bob: goal in collision: (?P<a>\S+) "
-            r"(touches|is [0-9.]+ mm from) (?P<b>\S+) \(clearance 10 mm\)$"
+            r"(touches|is [0-9.]+ mm from) (?P<b>\S+) \(clearance 10 mm"
+            r"( \+ [0-9.]+ mm of the physics' collision margin)?\)$"
         )
         for goal in (
             ["--joints", *joints(tool_low(-0.9))],

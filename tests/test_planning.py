@@ -21,6 +21,7 @@ import pytest
 import armfleet
 from armfleet.messages import FloatArray
 from armfleet.planning import FailureReason, Plan, PlanningFailed
+from armfleet.planning.path_timing import JointLimits, TimedPath
 from armfleet.recording import open_recording
 from tests.planning_helpers import (
     ARRIVAL_RAD,
@@ -72,10 +73,12 @@ def long_turn_plan(world: armfleet.World) -> Plan:
 def test_a_timed_path_keeps_every_joint_limit_and_its_straight_segments(
     make: Callable[[armfleet.World], Plan],
 ) -> None:
-    """A plan sampled every 50 us: every joint's |v|, |a| and finite-difference jerk within
-    the controller's limits (and the binding one reached, so the check has teeth), every
-    sample on the straight segment between the waypoints it lies between, at rest at
-    each waypoint."""
+    """The rest-to-rest reference timing of a plan's waypoints (``TimedPath``; plans pass
+    through their waypoints, tests/test_smooth_motion.py) sampled every 50 us: every
+    joint's |v|, |a| and finite-difference jerk within the controller's limits (and the
+    binding one reached, so the check has teeth), every sample on the straight segment
+    between the waypoints it lies between, at rest at each waypoint; the plan's own
+    timing takes no longer."""
     with shared_cell() as world:
         plan = make(world)
         arms = [world.arm(name) for name in plan.arms]
@@ -92,7 +95,7 @@ def test_a_timed_path_keeps_every_joint_limit_and_its_straight_segments(
                 for arm in arms
             ]
         )
-        timing = plan.timing
+        timing = TimedPath(plan.waypoints, JointLimits(velocity, acceleration, jerk))
         step = 1.0 / TIMING_SAMPLES_PER_S
         times = np.arange(0.0, timing.duration, step)
         position, speed, accel = timing.at(times)
@@ -124,7 +127,8 @@ def test_a_timed_path_keeps_every_joint_limit_and_its_straight_segments(
             end = timing.at(np.array([arrivals[index + 1]]))
             np.testing.assert_allclose(end[0][0], b, atol=1e-12)
             assert np.abs(end[1]).max() < 1e-9  # at rest at every waypoint
-        assert timing.duration == pytest.approx(plan.duration_s - plan.start_delay_s)
+        assert plan.timing.duration == pytest.approx(plan.duration_s - plan.start_delay_s)
+        assert plan.timing.duration <= timing.duration + 1e-9
 
 
 # -- the two-arm swap -----------------------------------------------------------------------

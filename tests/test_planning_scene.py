@@ -174,10 +174,11 @@ class ScratchCell:
         self.home = np.concatenate([arm.positions for arm in self.arms])
         self.pairs = counted_pairs(world, clearance_m)
         # The scene exactly as the planner builds it for a request of both arms (the
-        # planner's snapshot is private: there is no public way to the checker itself).
-        self.checker: CollisionChecker = world._planner._snapshot(clearance_m).checker(
-            ("bob", "toby")
-        )
+        # planner's snapshot and scenes are private: no public way leads to the checker).
+        # This world never plans, so the scene lent here is nobody else's meanwhile.
+        planner = world._planner
+        with planner._scenes.scene(planner._snapshot(clearance_m)) as scene:
+            self.checker: CollisionChecker = scene.checker(("bob", "toby"))
 
     def put(self, state: FloatArray) -> None:
         offset = 0

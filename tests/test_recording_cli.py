@@ -78,7 +78,11 @@ def test_ctrl_c_leaves_a_complete_recording(tmp_path: Path) -> None:
         topics = {c.topic for c in summary.channels.values()}
         assert {"/bob/joint_states", "/tf", "/tf_static", "/bringup"} <= topics
         states = [m for _, _, m in reader.iter_messages(topics=["/bob/joint_states"])]
-    assert len(states) > 400  # 0.5 s at 1 kHz, paced to the wall clock
+    # Every step's state up to the interrupt, none lost: one per 1 ms of simulated time
+    # (how many steps the machine managed in the 0.5 s is its own business).
+    assert len(states) > 10
+    span_ms = (states[-1].log_time - states[0].log_time) / 1e6
+    assert len(states) == round(span_ms) + 1
     recording = open_recording(path)
     assert recording.complete and recording.arm_names == ("bob",)
     assert "bob" in (recording.spec_text or "")

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import armfleet
-from armfleet.errors import InvalidFlag, InvalidNumber
+from armfleet.errors import ArmfleetError, InvalidFlag, InvalidNumber
 from armfleet.planning import FailureReason, PlanningFailed
 from armfleet.remote import Client, RemotePlanningFailed
 from tests.remote_world import WorldProcess
@@ -135,6 +135,26 @@ def test_a_plan_longer_than_the_client_timeout_is_waited_for(cell: Cell) -> None
         client.remove("carl")
 
 
+def test_a_budgeted_plan_goes_around_the_post_and_an_exhausted_one_names_its_budget(
+    cell: Cell,
+) -> None:
+    """Over the live API, ``budget`` plans as locally: a budget of one iteration is
+    refused in the world's line naming it, nothing moved; 400 get bob past the post."""
+    client = cell.client
+    at_start(client)
+    bob = client.arm("bob")
+    before = bob.positions
+    with pytest.raises(RemotePlanningFailed) as caught:
+        bob.move_to(tool_low(-0.9), avoid_collisions=True, budget=1)
+    assert caught.value.reason is FailureReason.NO_PATH
+    assert "a budget of 1 iterations" in str(caught.value) and "\n" not in str(caught.value)
+    time.sleep(0.3)
+    assert np.abs(bob.positions - before).max() < UNMOVED_RAD
+    assert bob.move_to(tool_low(-0.9), avoid_collisions=True, budget=400) > 0.0
+    bob.wait(WAIT_S)
+    assert np.abs(bob.positions - tool_low(-0.9)).max() < HOLD_TOLERANCE_RAD
+
+
 @pytest.mark.parametrize(
     ("keywords", "error", "says"),
     [
@@ -161,6 +181,18 @@ def test_a_plan_longer_than_the_client_timeout_is_waited_for(cell: Cell) -> None
             InvalidNumber,
             "timeout_s = -1.0 is invalid; give seconds in [0.001, 60]",
             id="timeout_s=-1 -> InvalidNumber with the range, nothing sent",
+        ),
+        pytest.param(
+            {"avoid_collisions": True, "budget": 0},
+            InvalidNumber,
+            "budget = 0 is invalid; give planner iterations, an integer in 1..1000000",
+            id="budget=0 -> InvalidNumber with the range, nothing sent",
+        ),
+        pytest.param(
+            {"avoid_collisions": True, "budget": 100, "timeout_s": 1.0},
+            ArmfleetError,
+            "give timeout_s (wall time) or budget (planner iterations, reproducible), not both",
+            id="budget and timeout_s -> one or the other, nothing sent",
         ),
     ],
 )

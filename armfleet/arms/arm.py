@@ -41,7 +41,7 @@ from armfleet.messages import (
     Positions,
 )
 from armfleet.motion.cartesian_path import LinearPathPlanner
-from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S, MoveOptions
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, MoveOptions
 from armfleet.motion.pose_goal import PoseGoal
 from armfleet.physics.arm_body import ArmBody
 from armfleet.runtime.bus import Bus
@@ -274,6 +274,7 @@ class Arm:
         avoid_collisions: bool = False,
         clearance_m: float | None = None,
         timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns at once.
 
@@ -289,11 +290,9 @@ class Arm:
             ProtectiveStopError, ArmFault: nothing is sent and the current motion goes on.
             PlanningFailed, ArmInMotion: with ``avoid_collisions``; nothing moves.
         """
-        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s)
+        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s, budget)
         if options.avoid_collisions:
-            planned = self.plan(
-                positions, clearance_m=options.clearance_m, timeout_s=options.timeout_s
-            )
+            planned = self.plan(positions, **options.plan_keywords())
             return self._world_planner().execute(planned)
         values = self._position_controller.validate(positions)
         if self._controller_manager.fault is not None:
@@ -310,7 +309,8 @@ class Arm:
         *,
         link: str = "tool0",
         clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_TIMEOUT_S,
+        timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> Plan:
         """A collision-free motion to ``target``, without moving (``world.execute(plan)``).
 
@@ -319,20 +319,25 @@ class Arm:
                 ``pinocchio.SE3``) of ``link`` in ``frame``, as :meth:`move_to_pose`.
             frame, link: for a pose target.
             clearance_m: margin kept from other bodies [m], in [0.001, 0.5].
-            timeout_s: time budget [s].
+            timeout_s: time budget [s], in [0.001, 60]; 1 s when neither it nor
+                ``budget`` is given.
+            budget: work budget instead: RRT-Connect iterations, an integer in
+                1..1000000. The same request gives the same path in any process,
+                under any load (see :mod:`armfleet.planning.ompl_search`).
 
         Every other arm is an obstacle where it is; one that is moving is checked in
         time, along its remaining motion. See :mod:`armfleet.planning`.
 
         Raises:
             PlanningFailed: the start or goal is in collision (the links named), the
-                pose is unreachable, or no path was found in ``timeout_s``.
+                pose is unreachable, or no path was found in ``timeout_s`` (or
+                ``budget``).
             ArmInMotion, ArmFault, ProtectiveStopError, and the target errors of
             :meth:`move_to` and :meth:`solve_ik`.
         """
         goal = PoseGoal(target, frame, link) if is_pose(target) else target
         return self._world_planner().plan(
-            {self._name: goal}, clearance_m=clearance_m, timeout_s=timeout_s
+            {self._name: goal}, clearance_m=clearance_m, timeout_s=timeout_s, budget=budget
         )
 
     def _world_planner(self) -> MotionPlanner:
@@ -391,6 +396,7 @@ class Arm:
         avoid_collisions: bool = False,
         clearance_m: float | None = None,
         timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> float:
         """Move ``link`` to ``pose`` (in ``frame``); returns at once the planned duration [s].
 
@@ -405,16 +411,14 @@ class Arm:
             :meth:`move_to`; PlanningFailed with ``avoid_collisions``.
         """
         linear = flag(linear, "linear")
-        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s)
+        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s, budget)
         if options.avoid_collisions:
             if linear:
                 raise ArmfleetError(
                     f"{self._name}: choose linear=True (a straight tool line) or "
                     "avoid_collisions=True (a planned path around obstacles), not both"
                 )
-            plan = self.plan(
-                pose, frame, link=link, clearance_m=options.clearance_m, timeout_s=options.timeout_s
-            )
+            plan = self.plan(pose, frame, link=link, **options.plan_keywords())
             return self._world_planner().execute(plan)
         if self._controller_manager.fault is not None:
             raise ArmFault(self._name, self._controller_manager.fault)

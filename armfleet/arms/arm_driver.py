@@ -5,10 +5,15 @@ elsewhere (a plan, a common duration), announcing it, and the forward kinematics
 planner draws with are plumbing, kept here. The world makes one driver per arm and
 hands it to the planner (:class:`~armfleet.planning.planned_arm.PlannedArm`) and to
 :func:`~armfleet.motion.synchronised_motion.move_together`.
+
+The planner may solve a pose goal on a worker thread while the world steps: it asks the
+driver, on the stepping thread, for a :meth:`ArmDriver.pose_solver`, which looks the goal's
+frame up then and solves later with IK data of its own, reading nothing of the world.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from armfleet import topics
@@ -17,7 +22,9 @@ from armfleet.arms.gripper import Gripper
 from armfleet.controllers import ControllerManager, PositionController
 from armfleet.controllers.jerk_limited_trajectory import MotionPlan, SampledMotion
 from armfleet.description import ArmDescription
+from armfleet.errors import UnreachablePose
 from armfleet.kinematics import ArmKinematics
+from armfleet.kinematics.inverse_kinematics import InverseKinematics, link_frame, world_goal
 from armfleet.messages import FloatArray, JointCommand, PlannedMotion, Positions
 from armfleet.physics.arm_body import ArmBody
 from armfleet.runtime.bus import Bus
@@ -25,11 +32,18 @@ from armfleet.runtime.bus import Bus
 
 class ArmDriver:
     """Drives ``arm`` for the world: its parts read through the handle (so they raise
-    once the arm is removed), commands announced on ``bus`` as the arm's own are."""
+    once the arm is removed), commands announced on ``bus`` as the arm's own are.
 
-    def __init__(self, arm: Arm, bus: Bus) -> None:
+    Args:
+        arm: the arm.
+        bus: the world's bus.
+        frame_pose: the world pose of any frame of the world (the TF tree's), for pose goals.
+    """
+
+    def __init__(self, arm: Arm, bus: Bus, frame_pose: Callable[[str], FloatArray]) -> None:
         self._arm = arm
         self._bus = bus
+        self._frame_pose = frame_pose
 
     # -- what the planner reads ----------------------------------------------------------
     @property
@@ -76,6 +90,39 @@ class ArmDriver:
         self, pose: Any, frame: str = "world", *, link: str = "tool0", seed: Positions | None = None
     ) -> FloatArray:
         return self._arm.solve_ik(pose, frame, link=link, seed=seed)
+
+    def pose_solver(
+        self, pose: Any, frame: str = "world", *, link: str = "tool0"
+    ) -> Callable[[FloatArray | None], FloatArray]:
+        """The IK of ``link`` at ``pose`` in ``frame`` (as :meth:`solve_ik`), its frame looked
+        up and the arm's position read now; the solve runs on any thread, later, with IK
+        data of its own.
+
+        Raises:
+            TargetPoseError, UnknownFrame: now, as :meth:`solve_ik` raises them.
+        """
+        arm = self._arm
+        kinematics = arm.kinematics
+        frame_name = link_frame(arm.name, kinematics, arm.description.prefix, link)
+        goal = world_goal(pose, frame, self._frame_pose)
+        here = self.body.position.copy()
+        indices = kinematics.arm_indices
+        ik = InverseKinematics(kinematics)
+        name = arm.name
+
+        def solve(seed: FloatArray | None) -> FloatArray:
+            start = here.copy()
+            if seed is not None:
+                start[indices] = seed
+            solution = ik.solve(frame_name, goal, start)
+            if not solution.converged:
+                raise UnreachablePose(
+                    name, link, solution.position_error_m, solution.rotation_error_rad
+                )
+            positions: FloatArray = solution.positions[indices].copy()
+            return positions
+
+        return solve
 
     def tool_position(self, positions: FloatArray) -> FloatArray:
         """World position of tool0 with the arm joints at ``positions`` [m]."""

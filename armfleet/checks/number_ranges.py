@@ -117,6 +117,10 @@ REPLAY_SPEED = NumberRange(0.001, 1000.0, "a factor (times real time)")
 CLEARANCE_M = NumberRange(0.001, 0.5, "metres")
 #: The time budget of one planning request [s].
 PLANNING_TIMEOUT_S = NumberRange(0.001, 60.0, "seconds")
+#: The work budget of one planning request, instead of its time: RRT-Connect iterations
+#: (one sample and one extension of each tree each). A Panda's request in the shared
+#: cell needs tens at the median; a million is minutes of work.
+PLANNING_BUDGET = NumberRange(1, 1_000_000, "planner iterations", integer=True)
 
 # Sweeps (here, not in armfleet.sweeps, so that the CLI checks them without loading Ray).
 #: Most runs of one sweep.

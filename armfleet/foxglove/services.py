@@ -32,7 +32,7 @@ from armfleet.foxglove.channels import JSON, sdk_schema
 from armfleet.foxglove.errors import ServiceCallError
 from armfleet.recording.schemas import MessageSchema, Schema, number, numbers, obj, strings
 from armfleet.services.arguments import Arguments
-from armfleet.services.planning_options import PLANNING_REPLY_MARGIN_S
+from armfleet.services.planning_options import PlanningOptions
 from armfleet.services.protocol import Service
 from armfleet.services.world_services import FIELDS, WorldServices
 
@@ -55,6 +55,7 @@ _PLANNING: dict[str, Schema] = {
     },
     "clearance_m": number("margin kept from other bodies [m], with avoid_collisions"),
     "timeout_s": number("planning budget [s], with avoid_collisions"),
+    "budget": number("planner iterations instead of timeout_s (reproducible), with planning"),
 }
 _TIMED = {
     "time_s": number("simulated time of the call [s]"),
@@ -256,7 +257,7 @@ class ArmServices:
             raise ServiceCallError(spec.name, "the world has too many calls waiting") from None
         timeout = CALL_TIMEOUT_S
         if args.raw("avoid_collisions") is True:
-            timeout += float(args.raw("timeout_s") or 0.0) + PLANNING_REPLY_MARGIN_S + 5.0
+            timeout += PlanningOptions.from_request(spec.name, args).work_s + 5.0
         try:
             result = future.result(timeout=timeout)
         except FutureTimeout:

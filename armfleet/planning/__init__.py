@@ -1,11 +1,17 @@
 """Collision-free motion for one arm or several in a shared world.
 
 - :mod:`~armfleet.planning.scene`: the world as one Pinocchio model with coal geometry;
+- :mod:`~armfleet.planning.compiled_check`: the scene's checks and proof in compiled code;
 - :mod:`~armfleet.planning.problem`: a request made concrete (:class:`PlanningProblem`);
 - :mod:`~armfleet.planning.path_search`: OMPL's search, then the proof of clearance;
-- :mod:`~armfleet.planning.path_timing`: timing within every joint's limits;
+- :mod:`~armfleet.planning.path_timing`: timed segments, and the rest-to-rest reference;
+- :mod:`~armfleet.planning.smooth_timing`: through the waypoints without stopping;
+- :mod:`~armfleet.planning.curve_check`: the proof of clearance for the executed curve;
 - :mod:`~armfleet.planning.moving_arms`: arms that move while a plan is made;
-- :mod:`~armfleet.planning.motion_planner`: the world's planner (plan, execute).
+- :mod:`~armfleet.planning.planning_request`: a request read from the world, plannable on
+  any thread; :mod:`~armfleet.planning.scene_pool`: a scene of its own for each;
+- :mod:`~armfleet.planning.motion_planner`: the world's planner (prepare, solve, plan,
+  execute).
 
 Rule: imports :mod:`armfleet.motion`, :mod:`armfleet.objects`,
 :mod:`armfleet.controllers` and below; arms are seen through the

@@ -1,10 +1,20 @@
 """Plans for the arms of one world, from the world as it is, and runs the plans.
 
-Each request takes a snapshot of the world (:class:`PlanningScene`, rebuilt only when
-arms, objects or what the grippers hold change; otherwise only moved), turns its goals
-into a :class:`PlanningProblem`, finds a proven-clear path, times it, checks it in time
-against the arms that are moving, and returns a :class:`Plan`. Nothing moves until
-:meth:`MotionPlanner.execute`.
+A request is made in two parts, so that the world need not wait for it:
+
+- :meth:`MotionPlanner.prepare` reads the world, on the thread that steps it, into a
+  :class:`~armfleet.planning.planning_request.PlanningRequest` (where everything is, the
+  arms' starts and limits, the moving arms' remaining motions; cheap);
+- :meth:`MotionPlanner.solve` plans it on any thread, reading nothing of the world: it
+  takes a :class:`PlanningScene` of the world's make from a
+  :class:`~armfleet.planning.scene_pool.ScenePool` (rebuilt only when arms, objects or
+  what the grippers hold change; otherwise only moved), turns the goals into a
+  :class:`PlanningProblem`, finds a proven-clear path, times it, checks it in time
+  against the arms that were moving, and returns a :class:`Plan`.
+
+:meth:`MotionPlanner.plan` does both at once. Nothing moves until
+:meth:`MotionPlanner.execute`, which checks a plan made at an earlier step again against
+the world as it is then, and refuses it (:class:`StalePlan`) if it no longer holds.
 
 A continuous joint's goal is the equivalent of the asked angle nearest its start (a planned
 move takes the short way round: from 3.0 rad, a goal of -3.0 rad ends at 2 pi - 3.0), and it
@@ -21,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from armfleet.checks.number_ranges import CLEARANCE_M, PLANNING_TIMEOUT_S
+from armfleet.checks.number_ranges import CLEARANCE_M
 from armfleet.controllers.gripper_joints import finger_indices
 from armfleet.controllers.jerk_limited_trajectory import SampledMotion
 from armfleet.errors import (
@@ -30,34 +40,40 @@ from armfleet.errors import (
     ArmInMotion,
     ProtectiveStopError,
     UnknownArm,
-    UnreachablePose,
 )
-from armfleet.kinematics.continuous_joints import nearest_turn
 from armfleet.messages import FloatArray, PlannedMotion
-from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, PlanningLimit
 from armfleet.motion.pose_goal import PoseGoal
 from armfleet.planning.failure import FailureReason, PlanningFailed
 from armfleet.planning.moving_arms import MovingArm, find_start_delay
 from armfleet.planning.object_geometry import object_placement, object_shape
-from armfleet.planning.path_check import PathCertifier
 from armfleet.planning.path_search import find_path
-from armfleet.planning.path_timing import JointLimits, TimedPath
 from armfleet.planning.plan import Plan
 from armfleet.planning.planned_arm import PlannedArm
-from armfleet.planning.problem import PlanningProblem, search_bounds
-from armfleet.planning.scene import ArmGeometry, PlanningScene, SceneObject, arm_geometry
+from armfleet.planning.planning_request import (
+    ArmRequest,
+    PlanningRequest,
+    arm_limits,
+    goal_state,
+)
+from armfleet.planning.problem import PlanningProblem
+from armfleet.planning.scene import ArmGeometry, SceneObject, arm_geometry
+from armfleet.planning.scene_pool import SceneParts, ScenePool, SceneSnapshot
+from armfleet.planning.smooth_timing import SmoothPath
 
 if TYPE_CHECKING:
     from armfleet.objects import WorldObject
 
-#: Rounds of other IK solutions (one per pose-goal arm, in turn) tried for a goal whose
-#: first solution is in collision.
-IK_ALTERNATIVES = 12
 #: Tool path points drawn per second of motion.
 TOOL_PATH_RATE_HZ = 50.0
 
 
 Goal = Any  # joint positions, or a PoseGoal
+
+
+class StalePlan(ArmfleetError):
+    """A plan made at an earlier step no longer holds: its arms are elsewhere now, or the
+    world changed so that it is not clear any more. Nothing moved; plan again."""
 
 
 class MotionPlanner:
@@ -82,7 +98,8 @@ class MotionPlanner:
         self._touching = touching
         self._now = now
         self._geometries: dict[str, tuple[PlannedArm, ArmGeometry]] = {}
-        self._scene: tuple[tuple[Any, ...], PlanningScene] | None = None
+        self._parts: SceneParts | None = None
+        self._scenes = ScenePool()
 
     # -- planning ------------------------------------------------------------------------
     def plan(
@@ -90,51 +107,99 @@ class MotionPlanner:
         goals: Mapping[str, Goal],
         *,
         clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_TIMEOUT_S,
+        timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> Plan:
-        """Plan ``goals`` (per arm name: joint positions or a :class:`PoseGoal`) jointly.
+        """Plan ``goals`` (per arm name: joint positions or a :class:`PoseGoal`) jointly,
+        within ``timeout_s`` (1 s by default) or ``budget`` iterations (reproducible).
 
         Raises:
             PlanningFailed: start or goal in collision, goal unreachable, or no path.
             UnknownArm, ArmInMotion, ArmFault, ProtectiveStopError, and the errors of
                 ``arm.move_to`` / ``arm.solve_ik`` for bad goals. Nothing moves.
         """
+        return self.solve(
+            self.prepare(goals, clearance_m=clearance_m, timeout_s=timeout_s, budget=budget)
+        )
+
+    def prepare(
+        self,
+        goals: Mapping[str, Goal],
+        *,
+        clearance_m: float = DEFAULT_CLEARANCE_M,
+        timeout_s: float | None = None,
+        budget: int | None = None,
+    ) -> PlanningRequest:
+        """Read from the world what planning ``goals`` needs (on the thread that steps it).
+
+        Cheap: no collision check, no IK. Bad requests are refused here, as :meth:`plan`
+        refuses them; :meth:`solve` then plans the request on any thread.
+
+        Raises:
+            UnknownArm, ArmInMotion, ArmFault, ProtectiveStopError, and the errors of
+                ``arm.move_to`` / ``arm.solve_ik`` for bad goals. Nothing moves.
+        """
         began = time.perf_counter()
         clearance_m = CLEARANCE_M.check(clearance_m, "clearance_m")
-        timeout_s = PLANNING_TIMEOUT_S.check(timeout_s, "timeout_s")
+        limit = PlanningLimit.given(timeout_s, budget)
         if not isinstance(goals, Mapping) or not goals:
             raise ArmfleetError("plan takes a mapping {arm name: goal} with at least one arm")
         world_arms = self._arms()
         arms = [self._ready_arm(world_arms, name) for name in goals]
-        names = tuple(arm.name for arm in arms)
-        seconds: dict[str, float] = {}
+        requests = tuple(self._arm_request(arm, goals[arm.name]) for arm in arms)
         mark = time.perf_counter()
-        scene = self._snapshot(clearance_m)
-        movers = self._moving_arms(world_arms, names)
-        for mover in movers:
-            scene.set_arm_controlled(mover.name, mover.final)
-        seconds["scene"] = time.perf_counter() - mark
-        checker = scene.checker(names)
-        start = np.concatenate([self._start(arm) for arm in arms])
-        mark = time.perf_counter()
-        goal = self._goal_state(arms, goals, start, checker)
-        seconds["ik"] = time.perf_counter() - mark
-        lower, upper = search_bounds(
-            np.concatenate([arm.position_controller.lower for arm in arms]),
-            np.concatenate([arm.position_controller.upper for arm in arms]),
-            np.concatenate([_continuous(arm) for arm in arms]),
-            start,
-            goal,
+        snapshot = self._snapshot(clearance_m)
+        movers = self._moving_arms(world_arms, tuple(arm.name for arm in arms))
+        scene_s = time.perf_counter() - mark
+        return PlanningRequest(
+            arms=requests,
+            scene=snapshot,
+            movers=tuple(movers),
+            clearance_m=clearance_m,
+            limit=limit,
+            stamp=self._now(),
+            read_s=time.perf_counter() - began,
+            seconds={"scene": scene_s},
         )
-        problem = PlanningProblem(names, start, goal, lower, upper, checker, timeout_s)
-        path = find_path(problem, deadline=began + timeout_s)
-        seconds.update(path.seconds)
-        mark = time.perf_counter()
-        timed = TimedPath(path.waypoints, _limits(arms))
-        seconds["timing"] = time.perf_counter() - mark
-        mark = time.perf_counter()
-        delay, conflict = find_start_delay(scene, names, timed, movers)
-        seconds["in_time"] = time.perf_counter() - mark
+
+    def solve(self, request: PlanningRequest, *, sampled: bool = False) -> Plan:
+        """Plan ``request``; reads nothing of the world, so any thread may run it while
+        the world steps (each call takes a scene of its own from the pool).
+
+        Its time budget counts from when it started here, plus the time it took to read.
+        With ``sampled``, the motion is also sampled at each arm's controller period
+        (:attr:`Plan.sampled`), so that starting it later costs the stepping thread little.
+
+        Raises:
+            PlanningFailed: start or goal in collision, goal unreachable, or no path.
+        """
+        began = time.perf_counter()
+        limit = request.limit
+        names = request.names
+        seconds = dict(request.seconds)
+        with self._scenes.scene(request.scene) as scene:
+            mark = time.perf_counter()
+            for mover in request.movers:
+                scene.set_arm_controlled(mover.name, mover.final)
+            checker = scene.checker(names)
+            seconds["scene"] += time.perf_counter() - mark
+            start = request.start
+            mark = time.perf_counter()
+            goal = goal_state(request, checker)
+            seconds["ik"] = time.perf_counter() - mark
+            lower, upper = request.bounds(goal)
+            problem = PlanningProblem(
+                names, start, goal, lower, upper, checker, limit.timeout_s, limit.budget
+            )
+            path = find_path(problem, deadline=began - request.read_s + limit.timeout_s)
+            seconds.update(path.seconds)
+            mark = time.perf_counter()
+            timed = SmoothPath(path.waypoints, request.limits(), checker)
+            seconds["timing"] = time.perf_counter() - mark
+            mark = time.perf_counter()
+            delay, conflict = find_start_delay(scene, names, timed, request.movers)
+            seconds["in_time"] = time.perf_counter() - mark
+            checks = checker.checks
         if conflict is not None:
             raise PlanningFailed(
                 FailureReason.NO_PATH,
@@ -146,17 +211,21 @@ class MotionPlanner:
             )
         return Plan(
             arms=names,
-            joint_names={arm.name: arm.joint_names for arm in arms},
+            joint_names={arm.name: arm.joint_names for arm in request.arms},
             waypoints=path.waypoints,
             duration_s=delay + timed.duration,
             start_delay_s=delay,
-            planning_time_s=time.perf_counter() - began,
-            collision_checks=checker.checks,
+            planning_time_s=request.read_s + time.perf_counter() - began,
+            collision_checks=checks,
             samples=path.samples,
-            clearance_m=clearance_m,
-            stamp=self._now(),
+            clearance_m=request.clearance_m,
+            stamp=request.stamp,
             timing=timed,
             seconds=seconds,
+            scene=request.scene,
+            sampled={arm.period: timed.sample(arm.period) for arm in request.arms}
+            if sampled
+            else {},
         )
 
     def _ready_arm(self, world_arms: Mapping[str, PlannedArm], name: Any) -> PlannedArm:
@@ -179,43 +248,33 @@ class MotionPlanner:
         assert trajectory is not None  # _ready_arm checked it
         return np.array(trajectory.position, dtype=float)
 
-    def _goal_state(
-        self, arms: list[PlannedArm], goals: Mapping[str, Goal], start: FloatArray, checker: Any
-    ) -> FloatArray:
-        """The goal state: joint goals as given, pose goals by IK, preferring a solution
-        clear of collisions when the nearest one is not; a continuous joint's angle the
-        equivalent nearest its start."""
-        continuous = np.concatenate([_continuous(arm) for arm in arms])
-        offsets = np.cumsum([0, *(len(arm.joint_names) for arm in arms)])
-        parts: list[FloatArray] = []
-        pose_goals: dict[int, tuple[PlannedArm, PoseGoal]] = {}
-        for index, arm in enumerate(arms):
-            goal = goals[arm.name]
-            if isinstance(goal, PoseGoal):
-                parts.append(_solve_pose(arm, goal, None))
-                pose_goals[index] = (arm, goal)
-            else:
-                parts.append(arm.position_controller.validate(goal))
-        state = nearest_turn(np.concatenate(parts), start, continuous)
-        if not pose_goals or checker.valid(state):
-            return state
-        generator = np.random.default_rng(0)
-        for _ in range(IK_ALTERNATIVES):
-            for index, (arm, goal) in pose_goals.items():  # one arm at a time: the others
-                here = start[offsets[index] : offsets[index + 1]]  # keep what they have found
-                low, high = search_bounds(*arm.joint_limits, _continuous(arm), here, here)
-                try:
-                    parts[index] = _solve_pose(arm, goal, generator.uniform(low, high))
-                except ArmfleetError:
-                    continue
-                candidate = nearest_turn(np.concatenate(parts), start, continuous)
-                if checker.valid(candidate):
-                    return candidate
-        return state  # the nearest solution; the search names what it touches
+    @classmethod
+    def _arm_request(cls, arm: PlannedArm, goal: Goal) -> ArmRequest:
+        """``arm`` and its goal as they are now: a joint goal checked against its limits, a
+        pose goal's frame looked up (its IK runs later, on its own data)."""
+        controller = arm.position_controller
+        posed = isinstance(goal, PoseGoal)
+        return ArmRequest(
+            name=arm.name,
+            joint_names=arm.joint_names,
+            start=cls._start(arm),
+            goal=None if posed else controller.validate(goal),
+            solve_pose=arm.pose_solver(goal.pose, goal.frame, link=goal.link) if posed else None,
+            lower=controller.lower.copy(),
+            upper=controller.upper.copy(),
+            continuous=_continuous(arm),
+            period=controller.period,
+            limits=arm_limits(
+                controller.max_velocity,
+                float(controller.parameters["max_acceleration_rad_s2"]),
+                float(controller.parameters["max_jerk_rad_s3"]),
+            ),
+        )
 
     # -- the scene -----------------------------------------------------------------------------
-    def _snapshot(self, clearance_m: float) -> PlanningScene:
-        """The world now, as a planning scene (rebuilt only when its parts changed)."""
+    def _snapshot(self, clearance_m: float) -> SceneSnapshot:
+        """The world now, as the planner sees it (its parts made again only when they
+        changed; otherwise only where everything is)."""
         arms = self._arms()
         objects = self._objects()
         held = self._held_objects(arms, objects)
@@ -225,23 +284,24 @@ class MotionPlanner:
             tuple((name, id(obj)) for name, obj in objects.items()),
             tuple(sorted(held.items())),
         )
-        if self._scene is None or self._scene[0] != key:
+        if self._parts is None or self._parts.key != key:
             geometries = [self._geometry(arm) for arm in arms.values()]
             parts = [
                 SceneObject(name, object_shape(obj), pin.SE3.Identity(), held.get(name))
                 for name, obj in objects.items()
             ]
-            self._scene = (key, PlanningScene(geometries, parts, clearance_m))
-        scene = self._scene[1]
-        for name, arm in arms.items():
-            scene.set_arm(name, arm.body.position)
+            self._parts = SceneParts(key, geometries, parts, clearance_m)
+        placements = {}
         for name, obj in objects.items():
             holder = held.get(name)
             if holder is None:
-                scene.set_object(name, object_placement(obj))
+                placements[name] = object_placement(obj)
             else:
-                scene.set_object(name, _in_hand(arms[holder], obj, scene))
-        return scene
+                hand = self._geometry(arms[holder]).hand_joint
+                assert hand is not None  # only arms with a gripper hold things
+                placements[name] = _in_hand(arms[holder], obj, hand)
+        positions = {name: arm.body.position.copy() for name, arm in arms.items()}
+        return SceneSnapshot(self._parts, positions, placements)
 
     def _geometry(self, arm: PlannedArm) -> ArmGeometry:
         cached = self._geometries.get(arm.name)
@@ -306,7 +366,7 @@ class MotionPlanner:
         arms = [self._ready_arm(world_arms, name) for name in plan.arms]
         start = np.concatenate([self._start(arm) for arm in arms])
         if not np.allclose(start, plan.waypoints[0], atol=1e-6, rtol=0.0):
-            raise ArmfleetError(
+            raise StalePlan(
                 f"the plan of {' + '.join(plan.arms)} starts elsewhere than the arms are now: "
                 "plan again from here"
             )
@@ -316,7 +376,7 @@ class MotionPlanner:
         motions = {}
         for arm in arms:
             controller = arm.position_controller
-            motion = plan.timing.sample(controller.period)
+            motion = plan.motion(controller.period)
             columns = plan.columns(arm.name)
             own = _delayed(
                 motion, columns, plan.waypoints[0, columns], round(delay / controller.period)
@@ -332,33 +392,31 @@ class MotionPlanner:
 
     def _recheck(self, plan: Plan) -> float:
         """The start delay a plan made earlier needs now; raise if it no longer holds."""
-        scene = self._snapshot(plan.clearance_m)
         movers = self._moving_arms(self._arms(), plan.arms)
-        for mover in movers:
-            scene.set_arm_controlled(mover.name, mover.final)
-        checker = scene.checker(plan.arms)
-        failure = PathCertifier(checker).first_failure(plan.waypoints)
+        snapshot = self._snapshot(plan.clearance_m)
+        unchanged = plan.scene is not None and plan.scene.same_as(snapshot)
+        if unchanged and not movers and plan.start_delay_s == 0.0:
+            return 0.0  # nothing moved since it was proven: the proof holds as it is
+        with self._scenes.scene(snapshot) as scene:
+            for mover in movers:
+                scene.set_arm_controlled(mover.name, mover.final)
+            checker = scene.checker(plan.arms)
+            failure = plan.timing.first_unclear(checker)
+            found = None if failure is None else checker.collision(failure)
+            if failure is None:
+                delay, conflict = find_start_delay(scene, plan.arms, plan.timing, movers)
         if failure is not None:
-            found = checker.collision(failure[1])
             what = f" ({found[0]} / {found[1]})" if found else ""
-            raise ArmfleetError(
+            raise StalePlan(
                 f"the plan of {' + '.join(plan.arms)} is no longer clear: the world changed "
                 f"since it was planned{what}; plan again"
             )
-        delay, conflict = find_start_delay(scene, plan.arms, plan.timing, movers)
         if conflict is not None:
-            raise ArmfleetError(
+            raise StalePlan(
                 f"the plan of {' + '.join(plan.arms)} is no longer clear: {conflict.arm} is "
                 "moving through it; plan again"
             )
         return delay
-
-
-def _solve_pose(arm: PlannedArm, goal: PoseGoal, seed: FloatArray | None) -> FloatArray:
-    try:
-        return arm.solve_ik(goal.pose, goal.frame, link=goal.link, seed=seed)
-    except UnreachablePose as exc:
-        raise PlanningFailed(FailureReason.GOAL_UNREACHABLE, str(exc), arms=(arm.name,)) from exc
 
 
 def _continuous(arm: PlannedArm) -> npt.NDArray[np.bool_]:
@@ -368,20 +426,8 @@ def _continuous(arm: PlannedArm) -> npt.NDArray[np.bool_]:
     return mask
 
 
-def _limits(arms: list[PlannedArm]) -> JointLimits:
-    velocity, acceleration, jerk = [], [], []
-    for arm in arms:
-        controller = arm.position_controller
-        n = controller.lower.size
-        velocity.append(controller.max_velocity)
-        acceleration.append(np.full(n, float(controller.parameters["max_acceleration_rad_s2"])))
-        jerk.append(np.full(n, float(controller.parameters["max_jerk_rad_s3"])))
-    return JointLimits(np.concatenate(velocity), np.concatenate(acceleration), np.concatenate(jerk))
-
-
-def _in_hand(arm: PlannedArm, obj: WorldObject, scene: PlanningScene) -> pin.SE3:
-    """Where a held object is in the frame of the hand joint that holds it."""
-    hand = scene.hand_joint(arm.name)
+def _in_hand(arm: PlannedArm, obj: WorldObject, hand: str) -> pin.SE3:
+    """Where a held object is in the frame of ``arm``'s joint ``hand``, which holds it."""
     kinematics = arm.kinematics
     data = kinematics.model.createData()
     pin.forwardKinematics(kinematics.model, data, arm.body.position)

@@ -17,7 +17,7 @@ import numpy as np
 
 from armfleet.messages import FloatArray
 from armfleet.planning.path_check import PathCertifier
-from armfleet.planning.path_timing import TimedPath
+from armfleet.planning.path_timing import TimedSegments
 from armfleet.planning.scene import CollisionChecker, PlanningScene
 
 #: Time between the samples of the in-time check [s] (proven clear between them).
@@ -71,7 +71,7 @@ class Conflict:
 
 def conflict_in_time(
     checker: CollisionChecker,
-    timed: TimedPath,
+    timed: TimedSegments,
     delay_s: float,
     movers: Sequence[MovingArm],
 ) -> Conflict | None:
@@ -98,7 +98,7 @@ def conflict_in_time(
 def find_start_delay(
     scene: PlanningScene,
     planned: Sequence[str],
-    timed: TimedPath,
+    timed: TimedSegments,
     movers: Sequence[MovingArm],
 ) -> tuple[float, Conflict | None]:
     """The shortest tried start delay [s] with no conflict, and the conflict when none works

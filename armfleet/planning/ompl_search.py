@@ -8,11 +8,24 @@ checks the result again, finer.
 
 OMPL objects are made per search and dropped after it: a validity callback that
 outlived the interpreter would be reported as a leak by nanobind at exit.
+
+A search runs within a time (a deadline) or within a number of RRT-Connect iterations
+(a budget: ``PlannerTerminationCondition`` of a callable that counts its calls, one per
+iteration). A budgeted search is reproducible: it restarts OMPL's random numbers from a
+seed made of the problem's start and goal (and the attempt), so the same request gives
+the same path, bit for bit, whatever ran before it in the process, on a busy machine or
+an idle one. Nothing else in it depends on time: the simplifier's steps are bounded by
+the path's vertices (``reduceVertices`` tries as many pairs as the path has states,
+``ropeShortcutPath`` walks it once), not by a clock. Each OMPL object takes its random
+numbers from one generator per process at its creation, so searches run one at a time
+(:data:`_ONE_SEARCH_AT_A_TIME`): a search in another thread would draw seeds in between.
 """
 
 from __future__ import annotations
 
+import threading
 import time
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +59,21 @@ def restart_random_numbers(seed: int) -> None:
         ou.setLogLevel(ou.LOG_ERROR)
 
 
+#: OMPL's seed generator is one per process and every OMPL object draws its seed from it
+#: when made: searches take turns, so that a budgeted search's objects get the seeds its
+#: restart gave them.
+_ONE_SEARCH_AT_A_TIME = threading.Lock()
+
+
+def search_seed(problem: PlanningProblem, attempt: int) -> int:
+    """The seed of a budgeted search: the same for the same start, goal and attempt, in
+    any process on any machine (CRC-32 of their bytes, little-endian doubles)."""
+    data = b"".join(
+        np.ascontiguousarray(q, dtype="<f8").tobytes() for q in (problem.start, problem.goal)
+    )
+    return zlib.crc32(data + attempt.to_bytes(4, "little"))
+
+
 #: Motion-check step as a fraction of the state space's extent (OMPL's resolution).
 MOTION_RESOLUTION = 0.01
 #: OMPL's ``PathSimplifier`` steps run on a solution, in order.
@@ -60,17 +88,19 @@ class SearchResult:
         path: waypoints (rows) from start to goal, or None when no path was found.
         samples: states in the planner's trees when it stopped.
         search_s, simplify_s: wall time of the search and of the simplification [s].
+        iterations: RRT-Connect iterations the search ran.
     """
 
     path: FloatArray | None
     samples: int
     search_s: float
     simplify_s: float = 0.0
+    iterations: int = 0
 
 
 class OmplRrtConnect:
-    """Bidirectional RRT (RRT-Connect) then OMPL's shortcutting, vertex reduction and
-    vertex collapsing, within the problem's time budget."""
+    """Bidirectional RRT (RRT-Connect) then OMPL's vertex reduction and rope shortcuts,
+    within a deadline or a number of iterations."""
 
     name = "OMPL RRTConnect"
 
@@ -82,9 +112,38 @@ class OmplRrtConnect:
         self.resolution = resolution
         self.simplification = simplification
 
-    def search(self, problem: PlanningProblem, deadline: float) -> SearchResult:
-        """Search a path from ``problem.start`` to ``problem.goal`` until ``deadline``
-        (``time.perf_counter()`` time). Start and goal must be valid."""
+    def search(
+        self,
+        problem: PlanningProblem,
+        deadline: float | None = None,
+        iterations: int | None = None,
+        attempt: int = 0,
+    ) -> SearchResult:
+        """Search a path from ``problem.start`` to ``problem.goal``. Start and goal must
+        be valid.
+
+        Args:
+            problem: what to plan.
+            deadline: stop searching at this ``time.perf_counter()`` time (with no
+                ``iterations``).
+            iterations: stop after this many RRT-Connect iterations instead, and restart
+                OMPL's random numbers from :func:`search_seed`: the result is then the
+                same in any process, under any load.
+            attempt: which search of the request this is (its seed with ``iterations``).
+
+        Raises:
+            ValueError: neither ``deadline`` nor ``iterations`` given.
+        """
+        if deadline is None and iterations is None:
+            raise ValueError("a search needs a deadline or a number of iterations")
+        with _ONE_SEARCH_AT_A_TIME:
+            if iterations is not None:
+                restart_random_numbers(search_seed(problem, attempt))
+            return self._search(problem, deadline, iterations)
+
+    def _search(
+        self, problem: PlanningProblem, deadline: float | None, iterations: int | None
+    ) -> SearchResult:
         n = problem.dimension
         space = ob.RealVectorStateSpace(n)
         bounds = ob.RealVectorBounds(n)
@@ -105,14 +164,19 @@ class OmplRrtConnect:
         planner = og.RRTConnect(info)
         planner.setProblemDefinition(definition)
         planner.setup()
+        counter = _IterationCounter(iterations)
         began = time.perf_counter()
-        planner.solve(max(1e-3, deadline - began))
+        if iterations is None:
+            assert deadline is not None  # search() checked it
+            planner.solve(max(1e-3, deadline - began))
+        else:
+            planner.solve(ob.PlannerTerminationCondition(counter.spent))
         search_s = time.perf_counter() - began
         data = ob.PlannerData(info)
         planner.getPlannerData(data)
         samples = int(data.numVertices())
         if not definition.hasExactSolution():
-            return SearchResult(None, samples, search_s)
+            return SearchResult(None, samples, search_s, iterations=counter.used)
         path = definition.getSolutionPath()
         began = time.perf_counter()
         simplifier = og.PathSimplifier(info)
@@ -122,4 +186,19 @@ class OmplRrtConnect:
         states = path.getStates()
         waypoints = np.array([state[0:n] for state in states], dtype=float)
         waypoints[0], waypoints[-1] = problem.start, problem.goal
-        return SearchResult(waypoints, samples, search_s, simplify_s)
+        return SearchResult(waypoints, samples, search_s, simplify_s, counter.used)
+
+
+class _IterationCounter:
+    """OMPL's termination condition as a count: RRT-Connect asks it once per iteration."""
+
+    def __init__(self, limit: int | None) -> None:
+        self.limit = limit
+        self.used = 0
+
+    def spent(self) -> bool:
+        """Whether the limit is reached (then no iteration is counted)."""
+        if self.limit is not None and self.used >= self.limit:
+            return True
+        self.used += 1
+        return False

@@ -12,6 +12,15 @@ between them move the other). So when every step keeps ``d_a + d_b <= 2 c`` and
 ``d_a <= 2 m``, nothing can meet between checked states: the path is proven
 contact-free, not sampled. The same holds with wider margins (the checker's ``far``
 check) and proportionally longer steps, which is how most of a path is proven.
+
+The pairs' margins hold the shapes' physics margins on top of ``c`` and ``m``
+(:func:`~armfleet.planning.scene.physics_margin`), and the steps are sized with ``c`` and
+``m`` alone: between checked states the scene's shapes stay that far apart, so PyBullet's
+(grown by their margins) do not meet.
+
+Where the checker has its compiled check, a whole path is walked in one compiled call
+(``cpp/planning_check.cpp``: the same walk, the same steps); the reach bounds are made
+once per scene and held objects' placements, not per request.
 """
 
 from __future__ import annotations
@@ -21,15 +30,41 @@ import math
 import numpy as np
 
 from armfleet.messages import FloatArray
+from armfleet.planning.compiled_check import prismatic_travel
 from armfleet.planning.scene import CollisionChecker
 
 
 def joint_levers(checker: CollisionChecker) -> FloatArray:
     """Per planned joint (the checker's state order), a bound [m] on how far any
-    geometry it carries is from it: how far a point moves per radian of that joint."""
+    geometry it carries is from it: how far a point moves per radian of that joint.
+
+    Kept on the checker, and made again only when a held object sits elsewhere in its
+    hand (the only geometry of the scene that moves on its joint)."""
+    scene = checker.scene
+    held = b"".join(
+        scene.geometry.geometryObjects[index].placement.homogeneous.tobytes()
+        for index in scene.object_geometries
+        if scene.geometry.geometryObjects[index].parentJoint != 0
+    )
+    if checker.levers is not None and checker.levers[0] == held:
+        return checker.levers[1]
+    levers = _reach_bounds(checker)
+    checker.levers = (held, levers)
+    return levers
+
+
+def _reach_bounds(checker: CollisionChecker) -> FloatArray:
     scene = checker.scene
     model = scene.model
-    offsets = [float(np.linalg.norm(p.translation)) for p in model.jointPlacements]
+    # A joint's offset from its parent, and what a prismatic joint adds to it (its travel).
+    prismatic = [
+        model.joints[j].shortname().startswith("JointModelP") for j in range(model.njoints)
+    ]
+    offsets = [
+        float(np.linalg.norm(placement.translation))
+        + (prismatic_travel(model, j) if prismatic[j] else 0.0)
+        for j, placement in enumerate(model.jointPlacements)
+    ]
     planned = scene.joint_ids(checker.arms)
     levers = np.zeros(len(planned))
     for item in scene.geometry.geometryObjects:
@@ -44,7 +79,8 @@ def joint_levers(checker: CollisionChecker) -> FloatArray:
         for k, joint in enumerate(planned):
             if joint in chain:
                 after = chain[chain.index(joint) + 1 :]
-                reach = extent + sum(offsets[j] for j in after)
+                # A prismatic joint moves what it carries by its own motion, no more.
+                reach = 1.0 if prismatic[joint] else extent + sum(offsets[j] for j in after)
                 levers[k] = max(levers[k], reach)
     return levers
 
@@ -68,9 +104,13 @@ class PathCertifier:
             raise ValueError("a contact-free proof needs margins > 0")
         self.levers = joint_levers(checker)
         self._near = (scene.clearance_m, scene.self_clearance_m)
-        self._far = (float(scene.far_margins.max()), float(scene.far_margins.min()))
+        self._far = (scene.far_clearance_m, scene.far_self_clearance_m)
         sizes = [scene.columns(arm).size for arm in checker.arms]
         self._bounds = np.cumsum([0, *sizes])[:-1]
+        if checker.compiled is not None:
+            checker.compiled.set_proof(
+                self.levers, [int(b) for b in self._bounds], *self._near, *self._far
+            )
 
     def steps(self, start: FloatArray, end: FloatArray, far: bool = False) -> int:
         """Equal steps from ``start`` to ``end`` that keep the proof with the near (or far)
@@ -90,6 +130,9 @@ class PathCertifier:
         such an end.
         """
         checker = self._checker
+        if checker.compiled is not None:
+            found = checker.compiled.first_failure(np.ascontiguousarray(path, dtype=float))
+            return None if found is None else (int(found[0]), np.asarray(found[1]))
         far_before = checker.far(path[0])
         if not far_before and not checker.valid(path[0]):
             return 0, path[0]

@@ -51,12 +51,13 @@ def find_path(
 ) -> JointPath:
     """A proven-clear path for ``problem``, by ``deadline`` (``time.perf_counter()`` time;
     ``problem.timeout_s`` from now by default: a request that spent some of its budget
-    before, on IK and the scene, passes its own).
+    before, on IK and the scene, passes its own), or within ``problem.budget`` iterations
+    of the search, over all its attempts (then the clock is not read to stop).
 
     Raises:
         PlanningFailed: the start or the goal is closer than the clearance to
             something (the pair is named), or no proven-clear path was found in
-            ``problem.timeout_s``.
+            ``problem.timeout_s`` (or ``problem.budget``).
     """
     search = search or OmplRrtConnect()
     checker = problem.checker
@@ -79,9 +80,16 @@ def find_path(
         return JointPath(straight, 0, checker.checks - checks_before, seconds)
     seconds["certify"] = time.perf_counter() - began
     seconds["search"] = seconds["simplify"] = 0.0
-    samples, resolution = 0, search.resolution
-    while time.perf_counter() < deadline:
-        result = OmplRrtConnect(resolution, search.simplification).search(problem, deadline)
+    samples, resolution, iterations, attempt = 0, search.resolution, 0, 0
+    budget = problem.budget
+    while time.perf_counter() < deadline if budget is None else iterations < budget:
+        result = OmplRrtConnect(resolution, search.simplification).search(
+            problem,
+            deadline if budget is None else None,
+            None if budget is None else budget - iterations,
+            attempt,
+        )
+        iterations, attempt = iterations + max(1, result.iterations), attempt + 1
         samples += result.samples
         seconds["search"] += result.search_s
         seconds["simplify"] += result.simplify_s
@@ -93,10 +101,15 @@ def find_path(
         if failure is None:
             return JointPath(result.path, samples, checker.checks - checks_before, seconds)
         resolution /= 4.0  # its motions touched between checked states: check them finer
+    within, more = (
+        (f"{problem.timeout_s:g} s", "more time (timeout_s; --planning-timeout)")
+        if budget is None
+        else (f"a budget of {budget} iterations", "a larger budget (budget; --budget)")
+    )
     raise PlanningFailed(
         FailureReason.NO_PATH,
-        f"no clear path within {problem.timeout_s:g} s ({samples} samples tried); "
-        "give more time (timeout_s; --planning-timeout), less clearance, or another goal",
+        f"no clear path within {within} ({samples} samples tried); "
+        f"give {more}, less clearance, or another goal",
         arms=problem.arms,
         samples=samples,
         problem=problem,
@@ -109,12 +122,19 @@ def _in_collision(
     found = problem.checker.collision(state)
     if found is None:  # the broadphase and the pair-by-pair check disagree: say so plainly
         return PlanningFailed(reason, "a pair is closer than its margin", arms=problem.arms)
-    first, second, distance = found
-    margin = problem.clearance_m
+    first, second, distance, margin = found
     where = "touches" if distance <= 0.0 else f"is {distance * 1000:.1f} mm from"
+    scene = problem.checker.scene
+    if scene.owner_of(first) == scene.owner_of(second):
+        keeps = f"an arm's links keep {margin * 1000:g} mm from each other"
+    else:
+        keeps = f"clearance {problem.clearance_m * 1000:g} mm"
+        physics = margin - problem.clearance_m
+        if physics > 1e-9:  # PyBullet collides these shapes grown by its margin
+            keeps += f" + {physics * 1000:g} mm of the physics' collision margin"
     return PlanningFailed(
         reason,
-        f"{first} {where} {second} (clearance {margin * 1000:g} mm)",
+        f"{first} {where} {second} ({keeps})",
         arms=problem.arms,
         links=(first, second),
         problem=problem,

@@ -6,8 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armfleet.controllers.jerk_limited_trajectory import SampledMotion
 from armfleet.messages import FloatArray
-from armfleet.planning.path_timing import TimedPath
+from armfleet.planning.path_timing import TimedSegments
+from armfleet.planning.scene_pool import SceneSnapshot
 
 
 @dataclass(frozen=True)
@@ -18,7 +20,7 @@ class Plan:
         arms: the planned arms, in the order of a state.
         joint_names: per arm, its controlled joints (the columns of :meth:`path`).
         waypoints: the joint path (rows: states of every planned arm, concatenated);
-            the joints move in straight lines between waypoints, resting at each.
+            the motion passes through each without stopping (``timing``).
         duration_s: from the start of the execution to the arrival [s], the start
             delay included.
         start_delay_s: time the arms wait at the start for a moving arm to pass [s].
@@ -31,6 +33,9 @@ class Plan:
         clearance_m: the margin kept between different bodies [m].
         stamp: simulated time when it was planned [s]; executing later checks it again.
         timing: the timed path (positions at any time of the motion).
+        scene: the world it was planned against (where every arm and object was).
+        sampled: ``timing`` sampled at its arms' controller periods [s] (made with the
+            plan, off the stepping thread; :meth:`motion` samples other periods).
     """
 
     arms: tuple[str, ...]
@@ -43,8 +48,15 @@ class Plan:
     samples: int
     clearance_m: float
     stamp: float
-    timing: TimedPath
+    timing: TimedSegments
     seconds: dict[str, float] = field(default_factory=dict)
+    scene: SceneSnapshot | None = field(default=None, repr=False, compare=False)
+    sampled: dict[float, SampledMotion] = field(default_factory=dict, repr=False, compare=False)
+
+    def motion(self, period: float) -> SampledMotion:
+        """Every planned joint's reference, one row per ``period`` [s] of the motion."""
+        sampled = self.sampled.get(period)
+        return sampled if sampled is not None else self.timing.sample(period)
 
     def columns(self, arm: str) -> slice:
         """Where ``arm``'s joints are in a state."""

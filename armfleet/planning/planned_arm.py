@@ -6,6 +6,7 @@ The world hands the planner one :class:`PlannedArm` per arm (an
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from armfleet.controllers import ControllerManager, PositionController
@@ -53,6 +54,13 @@ class PlannedArm(Protocol):
         self, pose: Any, frame: str = "world", *, link: str = "tool0", seed: Positions | None = None
     ) -> FloatArray:
         """Arm joint positions that put ``link`` at ``pose`` in ``frame``."""
+        ...
+
+    def pose_solver(
+        self, pose: Any, frame: str = "world", *, link: str = "tool0"
+    ) -> Callable[[FloatArray | None], FloatArray]:
+        """The IK of ``link`` at ``pose`` in ``frame``, with the frame looked up now and the
+        arm where it is now: safe to call on any thread, reading nothing of the world."""
         ...
 
     def publish_planned(self, motion: PlannedMotion) -> None:

@@ -33,7 +33,11 @@ class PlanningProblem:
         lower, upper: the box the search samples [rad or m]: the joint position limits,
             and a continuous joint's window (:func:`search_bounds`); always finite.
         checker: collision checks against the scene snapshot taken for this request.
-        timeout_s: time budget of the search [s].
+        timeout_s: time budget of the search [s] (wall time), when there is no
+            ``budget``.
+        budget: RRT-Connect iterations the search may run, over all its attempts; when
+            given, it bounds the search instead of ``timeout_s``, and the path is the
+            same for the same problem in any process, under any load.
     """
 
     arms: tuple[str, ...]
@@ -43,6 +47,7 @@ class PlanningProblem:
     upper: FloatArray
     checker: CollisionChecker
     timeout_s: float = DEFAULT_TIMEOUT_S
+    budget: int | None = None
 
     @property
     def dimension(self) -> int:
@@ -52,11 +57,18 @@ class PlanningProblem:
     def clearance_m(self) -> float:
         return self.checker.scene.clearance_m
 
+    @property
+    def limit(self) -> str:
+        """What bounds the search, as a keyword: ``budget=500`` or ``timeout_s=1``."""
+        if self.budget is not None:
+            return f"budget={self.budget}"
+        return f"timeout_s={self.timeout_s:g}"
+
     def __repr__(self) -> str:
         return (
             f"PlanningProblem(arms={self.arms}, start={np.round(self.start, 4).tolist()}, "
             f"goal={np.round(self.goal, 4).tolist()}, clearance_m={self.clearance_m}, "
-            f"timeout_s={self.timeout_s})"
+            f"{self.limit})"
         )
 
 

@@ -15,14 +15,22 @@ Which pairs count:
   with the planned joints: two things that stand still cannot start to collide.
 
 Between different bodies a pair collides when closer than the clearance (coal's
-``security_margin``); within one arm when its geometries touch. Checks run in compiled
-code: Pinocchio's broadphase manager (a dynamic AABB tree) over the active pairs.
+``security_margin``); within one arm when closer than the arm's own margin. To both,
+each geometry adds the collision margin the physics gives its shape
+(:func:`physics_margin`): PyBullet collides a convex hull grown by 1 mm, so a state clear
+by the clearance here is clear by it in PyBullet too, at any clearance allowed.
+
+Checks run in compiled code: ``cpp/planning_check.cpp``
+(:mod:`~armfleet.planning.compiled_check`) where the kernel is built and knows the
+scene's joints and shapes; otherwise, and as the reference, Pinocchio's broadphase
+manager (a dynamic AABB tree) over the active pairs.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import coal
 import numpy as np
@@ -30,6 +38,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from armfleet.messages import FloatArray
+from armfleet.planning.compiled_check import compiled_scene_check, placement_numbers
 from armfleet.planning.object_geometry import convex_hull
 
 GROUND = "ground"
@@ -41,6 +50,22 @@ SELF_CLEARANCE_M = 0.01
 #: Wider margins of the "far from everything" check [m]: between bodies, within an arm.
 FAR_CLEARANCE_M = 0.05
 FAR_SELF_CLEARANCE_M = 0.03
+#: Bullet's collision margin around a convex hull or a triangle mesh [m]: PyBullet's URDF
+#: importer (``gUrdfDefaultCollisionMargin``) and ``createCollisionShape`` give it to every
+#: mesh, and to a URDF cylinder, which it makes a convex hull of points on its rims.
+BULLET_MARGIN_M = 0.001
+
+
+def physics_margin(shape: coal.CollisionGeometry, from_urdf: bool) -> float:
+    """How far PyBullet's shape of ``shape`` may reach beyond it [m]: Bullet's collision
+    margin for a mesh (a convex hull or triangles) and for a URDF's cylinder; 0 for a box,
+    a sphere and a capsule, whose margins Bullet keeps inside them, and for the cylinders
+    of scene objects (Bullet's own cylinder, margin inside too)."""
+    if isinstance(shape, (coal.ConvexBase, coal.BVHModelBase)):
+        return BULLET_MARGIN_M
+    if isinstance(shape, coal.Cylinder) and from_urdf:
+        return BULLET_MARGIN_M
+    return 0.0
 
 
 @dataclass(frozen=True)
@@ -166,20 +191,39 @@ class PlanningScene:
             owners.append(obj.name)
         self.model, self.geometry = model, geometry
         self._owners = owners
+        #: Indices of the objects' geometries (their placements change between requests).
+        self.object_geometries = [geometry.getGeometryId(obj.name) for obj in objects]
+        arm_count = len(owners) - 1 - len(objects)  # the arms' geometries come first
+        #: Per geometry, how far PyBullet's shape may reach beyond it [m].
+        self.physics_margins = np.array(
+            [
+                physics_margin(item.geometry, index < arm_count)
+                for index, item in enumerate(geometry.geometryObjects)
+            ]
+        )
         self._held = {obj.name: obj.held_by for obj in objects if obj.held_by is not None}
-        self._checkers: dict[tuple[str, ...], CollisionChecker] = {}
+        self._checkers: dict[tuple[Any, ...], CollisionChecker] = {}
         self._add_pairs()
         same_body = np.array(
             [owners[pair.first] == owners[pair.second] for pair in geometry.collisionPairs],
             dtype=bool,
         )
-        #: Per collision pair, its margin [m]: within one arm, between different bodies.
-        self.margins = np.where(same_body, self.self_clearance_m, clearance_m)
+        #: The far check's margins without the physics margins [m]: between bodies,
+        #: within an arm (the proof sizes its long steps with them).
+        self.far_clearance_m = max(clearance_m, FAR_CLEARANCE_M)
+        self.far_self_clearance_m = max(self.self_clearance_m, FAR_SELF_CLEARANCE_M)
+        grown = np.array(
+            [
+                self.physics_margins[pair.first] + self.physics_margins[pair.second]
+                for pair in geometry.collisionPairs
+            ]
+        ).reshape(-1)
+        #: Per collision pair, its margin [m]: within one arm, between different bodies,
+        #: each with the two shapes' physics margins.
+        self.margins = np.where(same_body, self.self_clearance_m, clearance_m) + grown
         #: Per collision pair, the wider margin of :meth:`CollisionChecker.far` [m].
-        self.far_margins = np.where(
-            same_body,
-            max(self.self_clearance_m, FAR_SELF_CLEARANCE_M),
-            max(clearance_m, FAR_CLEARANCE_M),
+        self.far_margins = (
+            np.where(same_body, self.far_self_clearance_m, self.far_clearance_m) + grown
         )
         #: The configuration of every movable joint of every arm, where they are now.
         self.positions = pin.neutral(model)
@@ -297,18 +341,19 @@ class PlanningScene:
         return bool(joint == hand_id or self.model.parents[joint] == hand_id)
 
     # -- checking --------------------------------------------------------------------------------
-    def checker(self, arms: Sequence[str]) -> CollisionChecker:
+    def checker(self, arms: Sequence[str], compiled: bool = True) -> CollisionChecker:
         """A checker of configurations of ``arms``' controlled joints (concatenated in this
-        order), the rest of the scene where it is now.
+        order), the rest of the scene where it is now; ``compiled=False``: the Python
+        reference check, even where the compiled one is built.
 
         Checkers are kept per set of arms (building one costs milliseconds: two geometry
         data and two broadphase trees); each call hands it the scene as it is now and
         starts its count of checks afresh.
         """
-        key = tuple(arms)
+        key = (*arms, compiled)
         checker = self._checkers.get(key)
         if checker is None:
-            checker = self._checkers[key] = CollisionChecker(self, arms)
+            checker = self._checkers[key] = CollisionChecker(self, arms, compiled)
         checker.refresh()
         return checker
 
@@ -332,6 +377,22 @@ class PlanningScene:
         ]
 
 
+class TooClose(NamedTuple):
+    """Two links closer than their pair's margin.
+
+    Attributes:
+        first, second: the links (``<arm>_<link>``, or an object's name).
+        distance_m: between them [m]; negative: inside each other.
+        margin_m: what the pair must keep [m]: the clearance asked, and the physics'
+            collision margins of both shapes (:func:`physics_margin`).
+    """
+
+    first: str
+    second: str
+    distance_m: float
+    margin_m: float
+
+
 class CollisionChecker:
     """Collision checks of one request: the planned arms' joints move, the rest stands.
 
@@ -340,12 +401,16 @@ class CollisionChecker:
     the clearance) and :meth:`far` (a wider margin, :data:`FAR_CLEARANCE_M`, which lets
     :mod:`~armfleet.planning.path_check` take longer steps away from obstacles).
 
+    Both run in compiled code (:attr:`compiled`) where it can model the scene; Pinocchio's
+    broadphase (the reference) otherwise.
+
     Args:
         scene: the scene (its current configuration is the rest of the world).
         arms: the planned arms; a state is their controlled joints, concatenated.
+        compiled: use the compiled check where it is built and knows the scene.
     """
 
-    def __init__(self, scene: PlanningScene, arms: Sequence[str]) -> None:
+    def __init__(self, scene: PlanningScene, arms: Sequence[str], compiled: bool = True) -> None:
         self.scene = scene
         self.arms = tuple(arms)
         self.columns = np.concatenate([scene.columns(arm) for arm in arms])
@@ -353,22 +418,47 @@ class CollisionChecker:
         pairs = scene.geometry.collisionPairs
         self.active = np.array([moving[p.first] or moving[p.second] for p in pairs], dtype=bool)
         self.data = self._data(scene.margins)
-        self._far_data = self._data(scene.far_margins)
-        self._manager = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
-            scene.model, scene.geometry, self.data
-        )
-        self._far_manager = pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
-            scene.model, scene.geometry, self._far_data
-        )
+        self._managers: tuple[Any, Any, Any] | None = None  # Pinocchio's, made on first use
         self._model_data = scene.model.createData()
         self._q = scene.positions.copy()
-        #: How many states were checked.
-        self.checks = 0
+        self._checks = 0
+        #: The compiled check of this checker's pairs (``cpp/planning_check.cpp``), or None.
+        self.compiled: Any = None
+        if compiled:
+            grown = scene.physics_margins
+            pairs = [
+                (
+                    pair.first,
+                    pair.second,
+                    scene.margins[k],
+                    scene.far_margins[k],
+                    grown[pair.first] + grown[pair.second],
+                )
+                for k, pair in enumerate(scene.geometry.collisionPairs)
+                if self.active[k]
+            ]
+            self.compiled = compiled_scene_check(scene.model, scene.geometry, pairs, self.columns)
+        #: Reach bounds of the proof, with the placements of held objects they were made
+        #: for (:func:`armfleet.planning.path_check.joint_levers`).
+        self.levers: tuple[bytes, FloatArray] | None = None
+        self.refresh()
+
+    @property
+    def checks(self) -> int:
+        """How many states were checked since the last :meth:`refresh`."""
+        return self._checks + (self.compiled.checks if self.compiled is not None else 0)
 
     def refresh(self) -> None:
         """Take the scene's configuration for the joints not planned, and count anew."""
         self._q[:] = self.scene.positions
-        self.checks = 0
+        self._checks = 0
+        if self.compiled is not None:
+            compiled = self.compiled
+            compiled.set_configuration(self.scene.positions)
+            for index in self.scene.object_geometries:
+                placement = self.scene.geometry.geometryObjects[index].placement
+                compiled.set_placement(index, placement_numbers(placement))
+            compiled.checks = compiled.pairs_by_volume = compiled.pairs_by_coal = 0
 
     def _data(self, margins: FloatArray) -> pin.GeometryData:
         data = self.scene.geometry.createData()
@@ -379,36 +469,57 @@ class CollisionChecker:
 
     def valid(self, state: FloatArray) -> bool:
         """Whether the planned joints at ``state`` keep the clearance from everything."""
-        self.checks += 1
+        if self.compiled is not None:
+            return bool(self.compiled.clear(state, False))
+        self._checks += 1
         q = self._q
         q[self.columns] = state
-        return not pin.computeCollisions(self.scene.model, self._model_data, self._manager, q, True)
+        manager = self._broadphase()[0]
+        return not pin.computeCollisions(self.scene.model, self._model_data, manager, q, True)
 
     def far(self, state: FloatArray) -> bool:
         """Whether the planned joints at ``state`` keep :attr:`PlanningScene.far_margins`."""
-        self.checks += 1
+        if self.compiled is not None:
+            return bool(self.compiled.clear(state, True))
+        self._checks += 1
         q = self._q
         q[self.columns] = state
         model, data = self.scene.model, self._model_data
-        return not pin.computeCollisions(model, data, self._far_manager, q, True)
+        return not pin.computeCollisions(model, data, self._broadphase()[1], q, True)
 
-    def collision(self, state: FloatArray) -> tuple[str, str, float] | None:
-        """The closest of the pairs closer than their margin at ``state``: (link, link,
-        distance [m]; negative: inside each other), or None. Pair by pair: slower than
-        :meth:`valid`, for messages."""
+    def _broadphase(self) -> tuple[Any, Any]:
+        """Pinocchio's broadphase managers of the margins and the far margins."""
+        if self._managers is None:
+            scene = self.scene
+            far_data = self._data(scene.far_margins)
+            self._managers = (
+                pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
+                    scene.model, scene.geometry, self.data
+                ),
+                pin.BroadPhaseManager_DynamicAABBTreeCollisionManager(
+                    scene.model, scene.geometry, far_data
+                ),
+                far_data,  # kept alive with its manager
+            )
+        return self._managers[0], self._managers[1]
+
+    def collision(self, state: FloatArray) -> TooClose | None:
+        """The closest of the pairs closer than their margin at ``state``, or None. Pair
+        by pair: slower than :meth:`valid`, for messages."""
         scene = self.scene
         q = self._q.copy()
         q[self.columns] = state
         pin.updateGeometryPlacements(scene.model, self._model_data, scene.geometry, self.data, q)
-        closest: tuple[str, str, float] | None = None
+        closest: TooClose | None = None
         for index in np.flatnonzero(self.active):
             if pin.computeCollision(scene.geometry, self.data, int(index)):
                 pair = scene.geometry.collisionPairs[int(index)]
                 distance = pin.computeDistance(scene.geometry, self.data, int(index))
-                if closest is None or distance.min_distance < closest[2]:
-                    closest = (
+                if closest is None or distance.min_distance < closest.distance_m:
+                    closest = TooClose(
                         scene.body_link(pair.first),
                         scene.body_link(pair.second),
                         float(distance.min_distance),
+                        float(scene.margins[int(index)]),
                     )
         return closest

@@ -18,7 +18,6 @@ from armfleet.errors import ArmfleetError
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import FloatArray, JointCommand, Positions
 from armfleet.motion.move_options import DEFAULT_CLEARANCE_M
-from armfleet.motion.move_options import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
 from armfleet.remote import runtime_file
 from armfleet.remote.remote_arm import RemoteArm
 from armfleet.remote.remote_subscription import RemoteSubscription
@@ -180,7 +179,8 @@ class Client:
         *,
         avoid_collisions: bool = False,
         clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_PLANNING_TIMEOUT_S,
+        timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> float:
         """Start several arms on the same step so that they finish at the same instant,
         as :meth:`armfleet.World.move_together`.
@@ -190,8 +190,10 @@ class Client:
             avoid_collisions: plan the arms jointly around each other and everything
                 else, instead of each in a straight line; they must be at rest.
             clearance_m: margin the plan keeps from other bodies [m], in [0.001, 0.5].
-            timeout_s: the plan's time budget [s], in [0.001, 60]; this call waits that
-                long on top of the client's timeout.
+            timeout_s: the plan's time budget [s], in [0.001, 60] (1 s by default);
+                this call waits that long on top of the client's timeout.
+            budget: instead of ``timeout_s``, planner iterations (an integer in
+                1..1000000): the same request gives the same path under any load.
 
         Returns:
             The common duration [s].
@@ -201,10 +203,10 @@ class Client:
             RemotePlanningFailed: with ``avoid_collisions``, no plan (a
                 :class:`~armfleet.planning.PlanningFailed`, with its ``reason``); no arm
                 moves.
-            InvalidFlag, InvalidNumber: ``avoid_collisions``, ``clearance_m`` or
-                ``timeout_s`` is invalid (nothing is sent).
+            InvalidFlag, InvalidNumber: ``avoid_collisions``, ``clearance_m``,
+                ``timeout_s`` or ``budget`` is invalid (nothing is sent).
         """
-        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
+        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s, budget)
         wire = {name: _floats(values) for name, values in targets.items()}
         args = {"targets": wire, **planning}
         return float(self.call("move_together", args, work_s=work_s)["duration_s"])

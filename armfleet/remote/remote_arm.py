@@ -14,7 +14,6 @@ from armfleet.errors import ArmfleetError, NoGripper
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import ArmMode, FloatArray, JointState, Positions
 from armfleet.motion.move_options import DEFAULT_CLEARANCE_M
-from armfleet.motion.move_options import DEFAULT_TIMEOUT_S as DEFAULT_PLANNING_TIMEOUT_S
 from armfleet.remote.remote_gripper import RemoteGripper
 from armfleet.remote.service_caller import ServiceCaller
 from armfleet.services.codec import decode_message
@@ -114,7 +113,8 @@ class RemoteArm:
         *,
         avoid_collisions: bool = False,
         clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_PLANNING_TIMEOUT_S,
+        timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> float:
         """Send target ``positions`` (one per :attr:`joint_names`); returns once the world
         has accepted them, at a step boundary, the planned duration of the motion [s].
@@ -123,8 +123,10 @@ class RemoteArm:
             avoid_collisions: go around everything in the world instead of in a
                 straight line (the arm must be at rest), as :meth:`armfleet.Arm.move_to`.
             clearance_m: margin the plan keeps from other bodies [m], in [0.001, 0.5].
-            timeout_s: the plan's time budget [s], in [0.001, 60]; this call waits that
-                long on top of the client's timeout.
+            timeout_s: the plan's time budget [s], in [0.001, 60] (1 s by default);
+                this call waits that long on top of the client's timeout.
+            budget: instead of ``timeout_s``, planner iterations (an integer in
+                1..1000000): the same request gives the same path under any load.
 
         Raises:
             RemoteError: the world refused them (wrong length, not finite, outside the
@@ -134,7 +136,7 @@ class RemoteArm:
                 moved.
             InvalidFlag, InvalidNumber: a planning option is invalid (nothing is sent).
         """
-        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
+        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s, budget)
         args = {"name": self._name, "positions": self._vector(positions), **planning}
         return float(self._client.call("move", args, work_s=work_s)["duration_s"])
 
@@ -147,7 +149,8 @@ class RemoteArm:
         linear: bool = False,
         avoid_collisions: bool = False,
         clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_PLANNING_TIMEOUT_S,
+        timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> float:
         """Move ``link`` to ``pose`` in ``frame``; returns, once the world has accepted the
         goal, the planned duration [s].
@@ -158,7 +161,7 @@ class RemoteArm:
             frame: a frame of the world's TF tree (``world``, ``toby_tool0``, an object).
             link: the arm's link to place, unprefixed or prefixed.
             linear: follow a straight line from where the link is (from rest).
-            avoid_collisions, clearance_m, timeout_s: plan around everything in the
+            avoid_collisions, clearance_m, timeout_s, budget: plan around everything in the
                 world, as :meth:`move_to` (not with ``linear``).
 
         Raises:
@@ -168,7 +171,7 @@ class RemoteArm:
             RemotePlanningFailed: with ``avoid_collisions``, no plan; nothing moved.
         """
         linear = flag(linear, "linear")
-        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s)
+        planning, work_s = planning_request(avoid_collisions, clearance_m, timeout_s, budget)
         pin = sys.modules.get("pinocchio")  # a pinocchio.SE3 exists only once it is loaded
         if pin is not None and isinstance(pose, pin.SE3):
             pose = pose.homogeneous  # the world checks it is a rigid transform

@@ -2,17 +2,42 @@
 
 The world stays single-threaded: a client thread never touches PyBullet or the
 controllers itself; it submits a function and waits on the returned future.
+
+A request whose answer takes longer than a step (a planned move: the search runs on a
+worker thread while the world goes on stepping) returns a :class:`Deferred` instead of
+its result: its future then completes when the deferred one does, and the queue moves
+on at once.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import queue
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future
+from concurrent.futures import CancelledError, Future
 from typing import Any, TypeVar
 
 T = TypeVar("T")
+
+
+class Deferred(Future[T]):
+    """The answer of a request that is still being worked out elsewhere: returned by a
+    submitted function, it completes that request's future when it completes (with its
+    result or its exception). Only this class is chained: a plain :class:`Future` a
+    function returns is its result, as any other value."""
+
+
+def _forward(source: Future[Any], target: Future[Any]) -> None:
+    """Complete ``target`` as ``source`` completed (a cancelled source fails it)."""
+    if source.cancelled():
+        target.set_exception(CancelledError())
+        return
+    error = source.exception()
+    if error is not None:
+        target.set_exception(error)
+    else:
+        target.set_result(source.result())
 
 
 class RequestQueue:
@@ -59,7 +84,11 @@ class RequestQueue:
                 if not future.set_running_or_notify_cancel():
                     continue
                 try:
-                    future.set_result(function())
+                    result = function()
+                    if isinstance(result, Deferred):
+                        result.add_done_callback(functools.partial(_forward, target=future))
+                    else:
+                        future.set_result(result)
                 except Exception as exc:  # the caller gets it; the world goes on
                     future.set_exception(exc)
                 except BaseException as exc:  # Ctrl-C: tell the caller, then stop

@@ -36,6 +36,7 @@ from armfleet import topics
 from armfleet.arms.arm import Arm
 from armfleet.checks.real_numbers import real_number
 from armfleet.messages import CollisionReport, FloatArray
+from armfleet.motion.move_options import SWEEP_BUDGET, PlanningLimit
 from armfleet.planning import Plan, PlanningFailed, PoseGoal
 from armfleet.runtime.bus import Bus
 from armfleet.scenarios.reach_targets import pose_error
@@ -155,7 +156,8 @@ def crossing(
     world: World,
     rng: np.random.Generator,
     *,
-    timeout_s: float = 1.0,
+    timeout_s: float | None = None,
+    budget: int | None = None,
     clearance_m: float = 0.01,
     settle_s: float = 0.2,
     tolerance_m: float = 0.001,
@@ -166,7 +168,10 @@ def crossing(
     Args:
         world: the launched crossing scene (arms ``bob`` and ``toby``, a ``table``).
         rng: the run's generator (draws the poses).
-        timeout_s: planning budget of each plan [s] (wall time).
+        timeout_s: time budget of each plan [s] (wall time: a loaded machine searches
+            less, and its rows differ).
+        budget: planner iterations of each plan instead (reproducible);
+            :data:`~armfleet.motion.move_options.SWEEP_BUDGET` when neither is given.
         clearance_m: margin of the plans between different bodies [m].
         settle_s: time run after each plan's duration [s].
         tolerance_m, tolerance_deg: a goal is reached when the tcp ends within this
@@ -191,6 +196,7 @@ def crossing(
         world,
         draw_crossing(world, rng),
         timeout_s=timeout_s,
+        budget=budget,
         clearance_m=clearance_m,
         settle_s=settle_s,
         tolerance_m=tolerance_m,
@@ -229,7 +235,8 @@ def cross(
     world: World,
     poses: Crossing,
     *,
-    timeout_s: float = 1.0,
+    timeout_s: float | None = None,
+    budget: int | None = None,
     clearance_m: float = 0.01,
     settle_s: float = 0.2,
     tolerance_m: float = 0.001,
@@ -242,10 +249,13 @@ def cross(
     """
     settle_s = real_number(settle_s, "settle_s", "a time in [0, 60] s", low=0.0, high=60.0)
     tolerance_rad = math.radians(tolerance_deg)
+    if timeout_s is None and budget is None:
+        budget = SWEEP_BUDGET
+    limit = PlanningLimit.given(timeout_s, budget)
     outcome = CrossingOutcome()
     stops_before = world.safety.stops
     try:
-        approach = _plan(world, poses.starts, clearance_m, timeout_s)
+        approach = _plan(world, poses.starts, clearance_m, limit)
     except PlanningFailed as exc:
         outcome.failure = exc.reason.name
         return outcome
@@ -260,7 +270,7 @@ def cross(
         outcome.failure = "START_MISSED"
         return outcome
     try:
-        outcome.plan = _plan(world, poses.goals, clearance_m, timeout_s)
+        outcome.plan = _plan(world, poses.goals, clearance_m, limit)
     except PlanningFailed as exc:
         outcome.failure, outcome.samples = exc.reason.name, exc.samples
         return outcome
@@ -285,9 +295,11 @@ def cross(
     return outcome
 
 
-def _plan(world: World, poses: dict[str, FloatArray], clearance_m: float, timeout_s: float) -> Plan:
+def _plan(
+    world: World, poses: dict[str, FloatArray], clearance_m: float, limit: PlanningLimit
+) -> Plan:
     goals = {name: PoseGoal(pose, "world", LINK) for name, pose in poses.items()}
-    return world.plan(goals, clearance_m=clearance_m, timeout_s=timeout_s)
+    return world.plan(goals, clearance_m=clearance_m, **limit.keywords())
 
 
 def _tcp(world: World, arm: str) -> FloatArray:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armfleet.arms.arm import Arm
+from armfleet.motion.move_options import SWEEP_BUDGET
 from armfleet.world import World
 
 GRASP_FROM_CENTRE_M = 0.07  # bob holds the bar's -x end, toby its +x end
@@ -67,8 +68,11 @@ class Watch:
             self.lowest_bar_z_m = min(self.lowest_bar_z_m, world.object("bar").position[2])
 
 
-def hand_over(world: World, *, realtime: bool = False) -> Watch:
-    """Run the handover in ``world`` (launched from handover.yaml); return what was seen."""
+def hand_over(world: World, *, realtime: bool = False, budget: int | None = None) -> Watch:
+    """Run the handover in ``world`` (launched from handover.yaml); return what was seen.
+
+    Each planned move has the default time budget, or ``budget`` planner iterations
+    (then the same plans on any machine under any load)."""
     bob, toby = world.arm("bob"), world.arm("toby")
     watch = Watch()
 
@@ -77,7 +81,7 @@ def hand_over(world: World, *, realtime: bool = False) -> Watch:
 
     def go(arm: Arm, pose: np.ndarray) -> None:
         """A planned move around everything in the world (the other arm included)."""
-        wait(arm.move_to_pose(pose, link="tcp", avoid_collisions=True) + 0.2)
+        wait(arm.move_to_pose(pose, link="tcp", avoid_collisions=True, budget=budget) + 0.2)
 
     def straight(arm: Arm, pose: np.ndarray) -> None:
         wait(arm.move_to_pose(pose, link="tcp", linear=True) + 0.2)
@@ -108,7 +112,7 @@ def hand_over(world: World, *, realtime: bool = False) -> Watch:
     bob.gripper.open()
     wait(0.5)
     straight(bob, lifted(world.tf.lookup("world", "bob_tcp")))
-    bob.move_to(bob.description.home, avoid_collisions=True)  # toby plans round it
+    bob.move_to(bob.description.home, avoid_collisions=True, budget=budget)  # toby plans round it
     # Toby puts the bar on the mat and steps back.
     toby_in_bar = np.linalg.solve(bar(), world.tf.lookup("world", "toby_tcp"))
     mat = world.tf.lookup("world", "mat")
@@ -119,7 +123,7 @@ def hand_over(world: World, *, realtime: bool = False) -> Watch:
     toby.gripper.open()
     wait(0.5)
     straight(toby, lifted(place))
-    wait(toby.move_to(toby.description.home, avoid_collisions=True) + 0.5)
+    wait(toby.move_to(toby.description.home, avoid_collisions=True, budget=budget) + 0.5)
     return watch
 
 
@@ -130,13 +134,19 @@ def placement_error_m(world: World) -> float:
 
 
 def handover(
-    world: World, rng: np.random.Generator, *, tolerance_m: float = TOLERANCE_M
+    world: World,
+    rng: np.random.Generator,
+    *,
+    tolerance_m: float = TOLERANCE_M,
+    budget: int = SWEEP_BUDGET,
 ) -> dict[str, bool | int | float]:
     """The handover in ``world`` (launched from handover.yaml) as a sweep task.
 
     Args:
         rng: unused: the bar's start is drawn by the sweep (its ``randomize:``).
         tolerance_m: largest placement error of a success [m].
+        budget: planner iterations of each planned move (so that the row is the same
+            on any machine under any load).
 
     Returns:
         ``success`` (picked, placed within ``tolerance_m``, always held between, no
@@ -144,7 +154,7 @@ def handover(
         ``picked``, ``steps_unheld``, ``arm_contacts`` and ``stops``.
     """
     del rng
-    watch = hand_over(world)
+    watch = hand_over(world, budget=budget)
     error = placement_error_m(world)
     stops = world.safety.stops
     success = (

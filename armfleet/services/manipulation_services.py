@@ -10,6 +10,7 @@ there, with the world's messages, and then nothing moves.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -17,9 +18,11 @@ import numpy as np
 from armfleet.arms.arm import Arm
 from armfleet.arms.gripper import Gripper
 from armfleet.messages import GripperMode
+from armfleet.motion.pose_goal import PoseGoal
 from armfleet.services.arguments import Arguments
 from armfleet.services.codec import to_wire
 from armfleet.services.errors import ProtocolError
+from armfleet.services.planned_move import planned_move
 from armfleet.services.planning_options import PlanningOptions
 from armfleet.world import World
 
@@ -108,16 +111,21 @@ class ManipulationServices:
         linear = args.flag("linear", False)
         options = PlanningOptions.from_request("move_pose", args).keywords()
 
-        def move_pose() -> dict[str, Any]:
+        def moved(arm: Arm, duration: float) -> dict[str, Any]:
+            return {"time_s": world.time, "duration_s": duration, "moving": arm.is_moving}
+
+        def move_pose() -> Any:
             arm = world.arm(name)
             goal = (
                 np.reshape(pose, (4, 4))
                 if pose is not None
                 else _keeping_orientation(world, arm, position, frame, link)
             )
+            if options and not linear:  # planned off the stepping thread
+                targets = {name: PoseGoal(goal, frame, link)}
+                return planned_move(world, targets, options, partial(moved, arm))
             # linear together with avoid_collisions: the arm refuses it in its own words.
-            duration = arm.move_to_pose(goal, frame, link=link, linear=linear, **options)
-            return {"time_s": world.time, "duration_s": duration, "moving": arm.is_moving}
+            return moved(arm, arm.move_to_pose(goal, frame, link=link, linear=linear, **options))
 
         return move_pose
 
@@ -130,9 +138,13 @@ class ManipulationServices:
         options = PlanningOptions.from_request("move_together", args).keywords()
         world = self._world
 
-        def move_together() -> dict[str, Any]:
-            duration = world.move_together(targets, **options)
+        def moved(duration: float) -> dict[str, Any]:
             return {"time_s": world.time, "duration_s": duration, "arms": list(targets)}
+
+        def move_together() -> Any:
+            if options:  # planned off the stepping thread
+                return planned_move(world, targets, options, moved)
+            return moved(world.move_together(targets))
 
         return move_together
 

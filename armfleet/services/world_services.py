@@ -10,6 +10,7 @@ are its own, with its own messages.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from armfleet.arms.arm import Arm
@@ -25,6 +26,7 @@ from armfleet.services.errors import UnknownService, UnknownTopic
 from armfleet.services.manipulation_services import ManipulationServices, describe_gripper
 from armfleet.services.model_file_access import require_readable_model_files
 from armfleet.services.object_services import ObjectServices
+from armfleet.services.planned_move import planned_move
 from armfleet.services.planning_options import PLANNING_FIELDS, PlanningOptions
 from armfleet.services.protocol import Service, armfleet_version
 from armfleet.services.run_state import RunState
@@ -197,13 +199,20 @@ class WorldServices:
         return remove
 
     def prepare_move(self, args: Arguments) -> Work:
+        """A planned move (``avoid_collisions``) is planned off the stepping thread
+        (:func:`~armfleet.services.planning_options.planned_move`); the reply comes when
+        the motion starts."""
         name, positions, world = args.text("name"), args.vector("positions"), self._world
         options = PlanningOptions.from_request("move", args).keywords()
 
-        def move() -> dict[str, Any]:
-            arm = world.arm(name)
-            duration = arm.move_to(positions, **options)
+        def moved(arm: Arm, duration: float) -> dict[str, Any]:
             return {"time_s": world.time, "duration_s": duration, "moving": arm.is_moving}
+
+        def move() -> Any:
+            arm = world.arm(name)
+            if options:
+                return planned_move(world, {name: positions}, options, partial(moved, arm))
+            return moved(arm, arm.move_to(positions))
 
         return move
 

@@ -2,8 +2,9 @@
 
 Owns :class:`World`, the bring-up of one arm at a time (:mod:`~armfleet.world.bringup`),
 :func:`~armfleet.world.launch.launch` (a spec to a running world), the listener interface
-front ends attach with (:class:`WorldListener`) and the registry they are found in
-(:mod:`~armfleet.world.front_ends`).
+front ends attach with (:class:`WorldListener`), the registry they are found in
+(:mod:`~armfleet.world.front_ends`), and the planned moves front ends ask for, planned
+off the stepping thread (:mod:`~armfleet.world.planned_moves`).
 
 Rule: imports every core room below it (spec, arms, safety, planning, ...); never a front
 end (viewer, recording, Foxglove, the live API, sweeps, environments): they attach.

@@ -41,7 +41,7 @@ from armfleet.messages import (
     FloatArray,
     Positions,
 )
-from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, DEFAULT_TIMEOUT_S, MoveOptions
+from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, MoveOptions
 from armfleet.motion.synchronised_motion import move_together
 from armfleet.objects import ObjectSet, WorldObject, object_spec
 from armfleet.objects.object_spec import (
@@ -57,11 +57,12 @@ from armfleet.physics.joint_memory import JointMemory
 from armfleet.planning import MotionPlanner, Plan, PoseGoal
 from armfleet.runtime.bus import Bus
 from armfleet.runtime.lifetime import Lifetime
-from armfleet.runtime.request_queue import RequestQueue
+from armfleet.runtime.request_queue import Deferred, RequestQueue
 from armfleet.runtime.step_guard import StepGuard, owning
 from armfleet.safety.safety_supervisor import SafetySupervisor
 from armfleet.world.bringup import bring_up
 from armfleet.world.front_ends import ViewerHandle, front_end
+from armfleet.world.planned_moves import PlannedMoves
 from armfleet.world.world_listener import WorldListener
 
 if TYPE_CHECKING:
@@ -147,6 +148,8 @@ class World:
             self._contacts.touching_bodies,
             lambda: self.time,
         )
+        #: Planned moves asked by other threads, planned off the stepping thread.
+        self._planned_moves = PlannedMoves(self._planner, self.submit)
         #: Front ends attached to the world (viewer, Foxglove, ...), in attach order.
         self._listeners: list[WorldListener] = []
         self._viewer: ViewerHandle | None = None
@@ -301,6 +304,7 @@ class World:
         avoid_collisions: bool = False,
         clearance_m: float | None = None,
         timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> float:
         """Move several arms so they start on the same step and finish at the same instant.
 
@@ -311,7 +315,8 @@ class World:
             avoid_collisions: plan the arms jointly, in their combined joint space,
                 around each other and everything else (see :meth:`plan`), instead of
                 each in a straight line.
-            clearance_m, timeout_s: of the plan, with ``avoid_collisions``.
+            clearance_m, timeout_s, budget: of the plan, with ``avoid_collisions``
+                (see :meth:`plan`).
 
         Returns:
             The common duration [s]: the longest of the arms' own fastest motions.
@@ -325,9 +330,9 @@ class World:
             raise ArmfleetError(
                 f"move_together takes a mapping {{arm name: target}}, got {type(targets).__name__}"
             )
-        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s)
+        options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s, budget)
         if options.avoid_collisions:
-            plan = self.plan(targets, clearance_m=options.clearance_m, timeout_s=options.timeout_s)
+            plan = self.plan(targets, **options.plan_keywords())
             return self._planner.execute(plan)
         for name in targets:
             self.arm(name)  # UnknownArm lists the arms
@@ -338,14 +343,19 @@ class World:
         targets: Mapping[str, Positions | Any],
         *,
         clearance_m: float = DEFAULT_CLEARANCE_M,
-        timeout_s: float = DEFAULT_TIMEOUT_S,
+        timeout_s: float | None = None,
+        budget: int | None = None,
     ) -> Plan:
         """A collision-free motion of the named arms, planned jointly, without moving.
 
         Args:
             targets: per arm name, as :meth:`move_together` takes them.
             clearance_m: margin kept between different bodies [m], in [0.001, 0.5].
-            timeout_s: time budget of the request [s].
+            timeout_s: time budget of the request [s], in [0.001, 60]; 1 s when
+                neither it nor ``budget`` is given.
+            budget: work budget instead: RRT-Connect iterations (an integer in
+                1..1000000); the same request then gives the same path in any process,
+                under any load.
 
         Returns:
             The :class:`~armfleet.planning.Plan`: its path, duration, planning time and
@@ -353,7 +363,7 @@ class World:
 
         Raises:
             PlanningFailed: start or goal in collision (the links named), a pose goal
-                unreachable, or no path within ``timeout_s``; ``blocking_arm`` names a
+                unreachable, or no path within ``timeout_s`` or ``budget``; ``blocking_arm`` names a
                 moving arm that was in the way.
             ArmfleetError: an unknown arm, a moving or stopped arm, a bad target.
         """
@@ -364,7 +374,9 @@ class World:
             )
         # A 4x4 is tool0 in the world, as move_together takes it.
         goals = {name: PoseGoal(t) if is_pose(t) else t for name, t in targets.items()}
-        return self._planner.plan(goals, clearance_m=clearance_m, timeout_s=timeout_s)
+        return self._planner.plan(
+            goals, clearance_m=clearance_m, timeout_s=timeout_s, budget=budget
+        )
 
     def execute(self, plan: Plan) -> float:
         """Start ``plan`` on its arms, all on the next step; returns its duration [s].
@@ -377,6 +389,39 @@ class World:
         """
         self._check_open()
         return self._planner.execute(plan)
+
+    def start_planned_move(
+        self, targets: Mapping[str, Positions | Any], reply: Callable[[float], T], **options: Any
+    ) -> Deferred[T]:
+        """Plan ``targets`` on a worker thread while the world goes on stepping, then start
+        the motion at a step boundary: for front ends that serve other threads (the live
+        API). Call it on the stepping thread (in a function given to :meth:`submit`, which
+        may return the answer: the request then completes with it).
+
+        A plan that no longer holds when it is ready (another command moved its arm
+        meanwhile, or the world changed in its way) is planned again once from where the
+        arms are then, or refused in one line (:mod:`armfleet.world.planned_moves`).
+
+        Args:
+            targets: per arm name, as :meth:`plan` takes them.
+            reply: called with the motion's duration [s] on the stepping thread, right
+                after the start; its result is the answer.
+            options: of the plan, as :meth:`plan` takes them (``clearance_m``, ...).
+
+        Returns:
+            The answer: ``reply``'s result, or the error that stopped the move.
+
+        Raises:
+            ArmfleetError: as :meth:`plan` raises it for a request it refuses at once
+                (unknown arm, an arm moving, a bad target or option); nothing moves.
+        """
+        self._check_open()
+        if not isinstance(targets, Mapping):
+            raise ArmfleetError(
+                f"plan takes a mapping {{arm name: target}}, got {type(targets).__name__}"
+            )
+        goals = {name: PoseGoal(t) if is_pose(t) else t for name, t in targets.items()}
+        return self._planned_moves.start(goals, options, reply)
 
     # -- bring-up ---------------------------------------------------------------------
     @owning
@@ -471,7 +516,7 @@ class World:
             compiled=self._compiled_control,
         )
         self._arms[name] = arm
-        self._drivers[name] = ArmDriver(arm, self._bus)
+        self._drivers[name] = ArmDriver(arm, self._bus, self._tf.world_pose)
         self._frames.claim(FrameOwner.arm(name), frames)
         self._controllers.lay_out(self._arms.values())
         self._contacts.add_arm(name, arm.body)
@@ -730,6 +775,7 @@ class World:
                 self._listeners.clear()
             finally:
                 self._lifetime.end()
+                self._planned_moves.close()
                 self._requests.cancel_all(WorldClosed())
                 p.disconnect(physicsClientId=self._client)
 
