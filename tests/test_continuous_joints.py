@@ -271,7 +271,7 @@ def test_reach_targets_and_joint_actions_of_a_jaco_stay_within_a_turn(
     (from -inf..inf it drew NaN), and absolute joint actions are bounded the same way.
     (Gymnasium's checker runs an environment of a vendor file in
     tests/test_own_robot_surfaces.py; here only what continuous joints change.)"""
-    pytest.importorskip("gymnasium")
+    gymnasium = pytest.importorskip("gymnasium")
     from armfleet.envs.actions import ActionKind, StepLimits, arm_action_space
 
     bob = jaco.arm("bob")
@@ -279,6 +279,7 @@ def test_reach_targets_and_joint_actions_of_a_jaco_stay_within_a_turn(
     assert continuous.sum() == 3
     box = arm_action_space(bob, ActionKind.JOINT_POSITIONS, StepLimits())
     positions = box[ActionKind.JOINT_POSITIONS.value]
+    assert isinstance(positions, gymnasium.spaces.Box)
     assert np.all(positions.low[continuous] == np.float32(-np.pi))
     assert np.all(positions.high[continuous] == np.float32(np.pi))
     assert np.all(np.isfinite(positions.low)) and np.all(np.isfinite(positions.high))
