@@ -240,10 +240,11 @@ def planned_pass(
             outcomes.append(outcome)
             try:
                 respawn_at(world, spec, starts)
-                # The arms are new: the planner builds its scene again, once, as a
-                # long-running world does when arms come and go. Not part of the figures.
+                # The arms are new: the planner builds its scene (and the checker of the
+                # problem's arms) again, once, as a long-running world does when arms
+                # come and go. Not part of the figures.
                 began = time.perf_counter()
-                world.plan({problem.arms[0]: world.arm(problem.arms[0]).positions})
+                world.plan({name: world.arm(name).positions for name in problem.arms})
                 outcome.scene_build_ms = (time.perf_counter() - began) * 1e3
             except armfleet.ArmfleetError as exc:
                 outcome.error, outcome.reason = f"could not start: {exc}", "could not start"

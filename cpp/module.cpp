@@ -60,7 +60,7 @@ NB_MODULE(_fleet_kernel, module) {
            nb::arg("far_within"))
       .def("clear", &SceneCheck::clear, nb::arg("state"), nb::arg("far") = false, release())
       .def("first_failure", &SceneCheck::first_failure, nb::arg("path"),
-           nb::arg("adaptive") = true, release())
+           nb::arg("adaptive") = true, nb::arg("deviation") = Eigen::VectorXd(), release())
       .def_rw("checks", &SceneCheck::checks)
       .def_rw("pairs_by_volume", &SceneCheck::pairs_by_volume)
       .def_rw("pairs_by_coal", &SceneCheck::pairs_by_coal);

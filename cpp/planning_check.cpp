@@ -20,10 +20,16 @@
 #include <coal/distance.h>
 #include <coal/shape/geometric_shapes.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <stdexcept>
+#include <string>
 
 namespace armfleet {
 
@@ -65,8 +71,15 @@ struct Geometry {
   double radius;
   bool is_box;
   Vec3 half_sides;
+  // A capsule containing it (a hull's, a cylinder's, a capsule's own): the segment from
+  // ``tip_a`` to ``tip_b`` in its own frame, widened by ``capsule_radius``; none when
+  // ``has_capsule`` is false (a box, a sphere: their own bounds are tighter).
+  bool has_capsule = false;
+  Vec3 tip_a = Vec3::Zero(), tip_b = Vec3::Zero();
+  double capsule_radius = 0.0;
   Pose world;                 // where it is at the state checked
   Vec3 world_center;
+  Vec3 world_tip_a = Vec3::Zero(), world_tip_b = Vec3::Zero();
 };
 
 struct Pair {
@@ -88,12 +101,143 @@ double point_to_box(const Vec3& point, const Geometry& box) {
   return outside.norm();
 }
 
-// A lower bound on the distance between two geometries (from their containing volumes).
-double volume_distance(const Geometry& a, const Geometry& b) {
+// The distance between segments [p0, p1] and [q0, q1] (closest points by clamping, as in
+// Ericson's Real-Time Collision Detection, 5.1.9).
+double segment_to_segment(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  constexpr double tiny = 1e-18;
+  double s = 0.0, t = 0.0;
+  if (a <= tiny && e <= tiny) return r.norm();
+  if (a <= tiny) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= tiny) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2), denominator = a * e - b * b;
+      s = denominator > tiny ? std::clamp((b * f - c * e) / denominator, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return ((p0 + s * d1) - (q0 + t * d2)).norm();
+}
+
+// A lower bound on the distance from segment [p0, p1] to a box: the distance to a convex
+// set is convex along the segment, so a golden-section search brackets its minimum; the
+// bracket's width times the segment's length (the function is 1-Lipschitz in arc length)
+// is taken off what was found.
+double segment_to_box(const Vec3& p0, const Vec3& p1, const Geometry& box) {
+  const Mat3 to_box = box.world.rotation.transpose();
+  const Vec3 a = to_box * (p0 - box.world.translation);
+  const Vec3 d = to_box * (p1 - p0);
+  auto at = [&](double t) {
+    return ((a + t * d).cwiseAbs() - box.half_sides).cwiseMax(0.0).norm();
+  };
+  constexpr double golden = 0.6180339887498949;
+  double low = 0.0, high = 1.0;
+  double x1 = high - golden * (high - low), x2 = low + golden * (high - low);
+  double f1 = at(x1), f2 = at(x2);
+  double best = std::min({at(0.0), at(1.0), f1, f2});
+  for (int k = 0; k < 24 && best > 0.0; ++k) {
+    if (f1 <= f2) {
+      high = x2, x2 = x1, f2 = f1;
+      x1 = high - golden * (high - low);
+      f1 = at(x1);
+      best = std::min(best, f1);
+    } else {
+      low = x1, x1 = x2, f1 = f2;
+      x2 = low + golden * (high - low);
+      f2 = at(x2);
+      best = std::min(best, f2);
+    }
+  }
+  return best - (high - low) * d.norm();
+}
+
+// A lower bound on the distance between two geometries (from their containing volumes):
+// the spheres first; where they do not settle ``needed``, the capsules and boxes.
+double volume_distance(const Geometry& a, const Geometry& b, double needed) {
   double bound = (a.world_center - b.world_center).norm() - a.radius - b.radius;
+  if (bound > needed) return bound;
   if (b.is_box) bound = std::max(bound, point_to_box(a.world_center, b) - a.radius);
   if (a.is_box) bound = std::max(bound, point_to_box(b.world_center, a) - b.radius);
+  if (bound > needed) return bound;
+  if (a.has_capsule && b.has_capsule) {
+    bound = std::max(bound, segment_to_segment(a.world_tip_a, a.world_tip_b, b.world_tip_a,
+                                               b.world_tip_b) -
+                                a.capsule_radius - b.capsule_radius);
+  } else if (a.has_capsule && b.is_box) {
+    bound = std::max(bound, segment_to_box(a.world_tip_a, a.world_tip_b, b) - a.capsule_radius);
+  } else if (b.has_capsule && a.is_box) {
+    bound = std::max(bound, segment_to_box(b.world_tip_a, b.world_tip_b, a) - b.capsule_radius);
+  } else if (a.has_capsule) {
+    bound = std::max(bound, segment_to_segment(a.world_tip_a, a.world_tip_b, b.world_center,
+                                               b.world_center) -
+                                a.capsule_radius - b.radius);
+  } else if (b.has_capsule) {
+    bound = std::max(bound, segment_to_segment(b.world_tip_a, b.world_tip_b, a.world_center,
+                                               a.world_center) -
+                                b.capsule_radius - a.radius);
+  }
   return bound;
+}
+
+// The capsule containing ``points``: its segment along their principal axis, between the
+// extreme projections, its radius their largest distance from that axis (every point then
+// lies within it, and so does their convex hull).
+void contain_in_capsule(Geometry& geometry, const RowMatrix& points) {
+  const Vec3 mean = points.colwise().mean().transpose();
+  Mat3 spread = Mat3::Zero();
+  for (Eigen::Index r = 0; r < points.rows(); ++r) {
+    const Vec3 offset = points.row(r).transpose() - mean;
+    spread += offset * offset.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> solver(spread);
+  const Vec3 axis = solver.eigenvectors().col(2).normalized();
+  double low = std::numeric_limits<double>::infinity(), high = -low, radius = 0.0;
+  for (Eigen::Index r = 0; r < points.rows(); ++r) {
+    const Vec3 offset = points.row(r).transpose() - mean;
+    const double along = offset.dot(axis);
+    low = std::min(low, along);
+    high = std::max(high, along);
+    radius = std::max(radius, (offset - along * axis).norm());
+  }
+  geometry.has_capsule = true;
+  geometry.tip_a = mean + low * axis;
+  geometry.tip_b = mean + high * axis;
+  geometry.capsule_radius = radius * (1.0 + 1e-9) + 1e-12;
+}
+
+// Convex hulls already made, by their points' bytes: the checkers of every set of arms and
+// every pooled scene share one coal hull per mesh (qhull and the neighbour tables cost
+// milliseconds per link; a shape is only read by coal's queries).
+std::shared_ptr<coal::CollisionGeometry> shared_hull(const RowMatrix& points) {
+  static std::mutex lock;
+  static std::map<std::string, std::weak_ptr<coal::CollisionGeometry>> hulls;
+  std::string key(reinterpret_cast<const char*>(points.data()),
+                  static_cast<std::size_t>(points.size()) * sizeof(double));
+  const std::lock_guard<std::mutex> guard(lock);
+  auto found = hulls.find(key);
+  if (found != hulls.end()) {
+    if (auto hull = found->second.lock()) return hull;
+  }
+  auto vertices = std::make_shared<std::vector<coal::Vec3s>>();
+  for (Eigen::Index r = 0; r < points.rows(); ++r)
+    vertices->emplace_back(points(r, 0), points(r, 1), points(r, 2));
+  std::shared_ptr<coal::CollisionGeometry> hull(coal::ConvexBase::convexHull(
+      vertices, static_cast<unsigned int>(vertices->size()), true, "Qt"));
+  hull->computeLocalAABB();
+  hulls[key] = hull;
+  return hull;
 }
 
 coal::Transform3s coal_pose(const Pose& pose) {
@@ -141,6 +285,10 @@ struct SceneCheck::Impl {
   void place_geometry(Geometry& geometry) {
     if (geometry.joint != 0) geometry.world = joint_poses[geometry.joint] * geometry.placement;
     geometry.world_center = geometry.world.rotation * geometry.center + geometry.world.translation;
+    if (geometry.has_capsule) {
+      geometry.world_tip_a = geometry.world.rotation * geometry.tip_a + geometry.world.translation;
+      geometry.world_tip_b = geometry.world.rotation * geometry.tip_b + geometry.world.translation;
+    }
   }
 
   // Everything, where the configuration puts it; then which joints the planned columns move.
@@ -284,26 +432,32 @@ std::int64_t SceneCheck::add_geometry(std::int64_t joint, const std::vector<doub
       needs(2);
       geometry.shape = std::make_shared<coal::Cylinder>(parameters[0], 2.0 * parameters[1]);
       geometry.radius = std::hypot(parameters[0], parameters[1]);
+      geometry.has_capsule = true;  // the cylinder's axis (z), widened by its radius
+      geometry.tip_a = Vec3(0.0, 0.0, -parameters[1]);
+      geometry.tip_b = Vec3(0.0, 0.0, parameters[1]);
+      geometry.capsule_radius = parameters[0] * (1.0 + 1e-9) + 1e-12;
       break;
     case 3:
       needs(2);
       geometry.shape = std::make_shared<coal::Capsule>(parameters[0], 2.0 * parameters[1]);
       geometry.radius = parameters[0] + parameters[1];
+      geometry.has_capsule = true;
+      geometry.tip_a = Vec3(0.0, 0.0, -parameters[1]);
+      geometry.tip_b = Vec3(0.0, 0.0, parameters[1]);
+      geometry.capsule_radius = parameters[0] * (1.0 + 1e-9) + 1e-12;
       break;
     case 4: {
       if (points.cols() != 3 || points.rows() < 4)
         throw std::invalid_argument("a convex hull needs at least 4 points (rows of 3)");
-      auto vertices = std::make_shared<std::vector<coal::Vec3s>>();
-      for (Eigen::Index r = 0; r < points.rows(); ++r)
-        vertices->emplace_back(points(r, 0), points(r, 1), points(r, 2));
       const Vec3 low = points.colwise().minCoeff().transpose();
       const Vec3 high = points.colwise().maxCoeff().transpose();
       geometry.center = (low + high) / 2.0;
       geometry.radius = 0.0;
-      for (const auto& vertex : *vertices)
-        geometry.radius = std::max(geometry.radius, (vertex - geometry.center).norm());
-      geometry.shape.reset(coal::ConvexBase::convexHull(
-          vertices, static_cast<unsigned int>(vertices->size()), true, "Qt"));
+      for (Eigen::Index r = 0; r < points.rows(); ++r)
+        geometry.radius =
+            std::max(geometry.radius, (points.row(r).transpose() - geometry.center).norm());
+      geometry.shape = shared_hull(points);
+      contain_in_capsule(geometry, points);
       break;
     }
     default:
@@ -311,7 +465,7 @@ std::int64_t SceneCheck::add_geometry(std::int64_t joint, const std::vector<doub
   }
   // Rounding: the sphere grows by a part in 10^9 so that it contains every vertex.
   geometry.radius = geometry.radius * (1.0 + 1e-9) + 1e-12;
-  geometry.shape->computeLocalAABB();
+  if (kind != 4) geometry.shape->computeLocalAABB();
   impl_->geometries.push_back(std::move(geometry));
   impl_->place_all();
   return static_cast<std::int64_t>(impl_->geometries.size()) - 1;
@@ -393,7 +547,7 @@ bool SceneCheck::clear(const Eigen::VectorXd& state, bool far) {
     const Geometry& a = scene.geometries[pair.first];
     const Geometry& b = scene.geometries[pair.second];
     const double margin = far ? pair.far_margin : pair.margin;
-    if (volume_distance(a, b) > margin + 1e-6) {
+    if (volume_distance(a, b, margin + 1e-6) > margin + 1e-6) {
       ++pairs_by_volume;
       continue;
     }
@@ -413,8 +567,10 @@ bool SceneCheck::clear(const Eigen::VectorXd& state, bool far) {
 }
 
 std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failure(
-    const RowMatrix& path, bool adaptive) {
-  if (adaptive) return first_failure_adaptive(path);
+    const RowMatrix& path, bool adaptive, const Eigen::VectorXd& deviation) {
+  if (adaptive) return first_failure_adaptive(path, deviation);
+  if (deviation.size() != 0)
+    throw std::invalid_argument("a curve (a deviation from the chords) is proven adaptively only");
   Impl& scene = *impl_;
   const Eigen::Index n = static_cast<Eigen::Index>(scene.planned.size());
   if (path.cols() != n || path.rows() < 1)
@@ -476,17 +632,39 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
 // checked states t0 < t1 no point of the pair meets if (t1 - t0) W_p <= s_p(t0) + s_p(t1)
 // (from the nearer end, neither closes by more than its own slack). Every checked state
 // must also keep the clearance (clear()).
+//
+// A curve through the rows (a motion that bends away from its chords, each joint within
+// ``deviation`` of the chord between two rows at the same fraction of it) is proven the same
+// way with each pair's slack less D_p = sum_k w_pk deviation_k, how much nearer the curve
+// can bring the pair than the chord does: between two checked states the chord keeps at
+// least (s_p(t0) + s_p(t1) - (t1 - t0) W_p) / 2, so the curve keeps more than 0 when
+// (t1 - t0) W_p <= (s_p(t0) - D_p) + (s_p(t1) - D_p). The rows themselves are on the curve.
 std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failure_adaptive(
-    const RowMatrix& path) {
+    const RowMatrix& path, const Eigen::VectorXd& deviation) {
   Impl& scene = *impl_;
   const Eigen::Index n = static_cast<Eigen::Index>(scene.planned.size());
   if (path.cols() != n || path.rows() < 1)
     throw std::invalid_argument("a path is rows of one value per planned joint");
+  if (deviation.size() != 0 && (deviation.size() != n || !(deviation.array() >= 0.0).all()))
+    throw std::invalid_argument("a deviation is one value >= 0 per planned joint");
   scene.update_weights();
   using Failure = std::optional<std::pair<std::int64_t, Eigen::VectorXd>>;
   const std::size_t count = scene.pairs.size();
-  std::vector<double> slack(count), next_slack(count), closing(count);
+  std::vector<double> slack(count), next_slack(count), closing(count), bent(count, 0.0);
+  if (deviation.size() != 0)
+    for (std::size_t p = 0; p < count; ++p)
+      bent[p] = scene.weights.row(static_cast<Eigen::Index>(p)).dot(deviation);
   std::vector<bool> exact(count), next_exact(count);
+  // A pair whose exact slack the deviation takes more than half the clearance of at a checked
+  // state: the steps would shrink toward nothing there; the curve is refused instead.
+  bool too_bent = false;
+  auto exact_less_bent = [&](std::size_t p) {
+    Pair& pair = scene.pairs[p];
+    const double slack_left = scene.exact_slack(pair) - bent[p];
+    if (bent[p] > 0.0 && slack_left < 0.5 * (pair.margin - pair.grown)) too_bent = true;
+    ++pairs_by_coal;
+    return slack_left;
+  };
   const double inf = std::numeric_limits<double>::infinity();
   // Slacks at the placed state: lower bounds (the volumes' distance; the slack at the state
   // ``moved`` before, less what the pair may have closed since), coal's distance for the pairs
@@ -498,8 +676,10 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
     double tightest_ratio = inf;
     for (std::size_t p = 0; p < count; ++p) {
       const Pair& pair = scene.pairs[p];
-      out[p] = volume_distance(scene.geometries[pair.first], scene.geometries[pair.second]) -
-               pair.grown;
+      // The capsules are asked only of pairs the spheres put within the far margin.
+      out[p] = volume_distance(scene.geometries[pair.first], scene.geometries[pair.second],
+                               pair.far_margin) -
+               pair.grown - bent[p];
       if (before != nullptr) out[p] = std::max(out[p], (*before)[p] - moved * closing[p]);
       is_exact[p] = false;
       if (closing[p] > 0.0 && out[p] / closing[p] < tightest_ratio) {
@@ -508,9 +688,8 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
       }
     }
     if (tightest < count && tightest_ratio < best) {
-      out[tightest] = std::max(out[tightest], scene.exact_slack(scene.pairs[tightest]));
+      out[tightest] = std::max(out[tightest], exact_less_bent(tightest));
       is_exact[tightest] = true;
-      ++pairs_by_coal;
       best = std::min(best, out[tightest] / closing[tightest]);
     }
     // Pairs whose bound allows at least ``ACCEPT`` of the best step are taken at their bound:
@@ -518,14 +697,21 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
     constexpr double ACCEPT = 0.5;
     double bound = best;
     for (std::size_t p = 0; p < count; ++p) {
-      if (is_exact[p] || closing[p] <= 0.0) continue;
+      if (is_exact[p]) continue;
+      if (closing[p] <= 0.0) {
+        // Not brought closer by the chord; a curve's deviation may want the exact slack.
+        if (out[p] < 0.0) {
+          out[p] = std::max(out[p], exact_less_bent(p));
+          is_exact[p] = true;
+        }
+        continue;
+      }
       if (out[p] / closing[p] >= ACCEPT * best) {
         bound = std::min(bound, out[p] / closing[p]);
         continue;
       }
-      out[p] = std::max(out[p], scene.exact_slack(scene.pairs[p]));
+      out[p] = std::max(out[p], exact_less_bent(p));
       is_exact[p] = true;
-      ++pairs_by_coal;
       best = std::min(best, out[p] / closing[p]);
     }
     return std::min(best, bound);  // the largest step (in segments) one side's slack allows
@@ -541,6 +727,7 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
     scene.place(start);
     double t = 0.0;
     double reach = measure(slack, exact, 1.0, nullptr, 0.0);
+    if (too_bent) return Failure{{index, start}};
     while (t < 1.0) {
       // Try twice what this end's slack allows (the far end likely has as much); else what
       // it allows alone, which needs nothing of the far end but to be clear.
@@ -554,16 +741,17 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
         const double next_reach = measure(next_slack, next_exact, 1.0 - next, &slack, next - t);
         bool proven = true;
         for (std::size_t p = 0; p < count && proven; ++p) {
-          if (closing[p] <= 0.0) continue;  // the motion does not bring the two closer
+          // The motion does not bring the two closer (a curve's deviation still may).
+          if (closing[p] <= 0.0 && bent[p] == 0.0) continue;
           const double needed = (next - t) * closing[p];
           if (needed <= slack[p] + next_slack[p]) continue;
           if (!next_exact[p]) {
-            next_slack[p] = std::max(next_slack[p], scene.exact_slack(scene.pairs[p]));
+            next_slack[p] = std::max(next_slack[p], exact_less_bent(p));
             next_exact[p] = true;
-            ++pairs_by_coal;
           }
           proven = needed <= slack[p] + next_slack[p];
         }
+        if (too_bent) return Failure{{index, state}};
         if (!proven) {
           // One side's slack alone holds a step of ``reach``: not proven then would be a
           // fault of the bounds; refuse the path rather than pass it.

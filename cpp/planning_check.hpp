@@ -60,8 +60,10 @@ class SceneCheck {
   bool clear(const Eigen::VectorXd& state, bool far);
   // The first (segment, state) of ``path`` (rows) not proven clear, or none: with steps
   // sized by the distances found (``adaptive``), or path_check.py's walk, step for step.
-  std::optional<std::pair<std::int64_t, Eigen::VectorXd>> first_failure(const RowMatrix& path,
-                                                                         bool adaptive);
+  // With a ``deviation`` (per planned joint, adaptive only): of a curve through the rows
+  // that stays that close to the chord between two rows, joint by joint.
+  std::optional<std::pair<std::int64_t, Eigen::VectorXd>> first_failure(
+      const RowMatrix& path, bool adaptive, const Eigen::VectorXd& deviation);
   // Pairs settled by the bounding volumes, and by coal, since the count was reset.
   std::int64_t checks = 0;
   std::int64_t pairs_by_volume = 0;
@@ -69,7 +71,7 @@ class SceneCheck {
 
  private:
   std::optional<std::pair<std::int64_t, Eigen::VectorXd>> first_failure_adaptive(
-      const RowMatrix& path);
+      const RowMatrix& path, const Eigen::VectorXd& deviation);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

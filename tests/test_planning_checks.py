@@ -4,6 +4,9 @@
   (Pinocchio's broadphase over the same pairs) on thousands of random states of two
   Pandas among objects, near and far, and the same first failure on whole paths.
 - A segment the compiled certifier passes is clear in PyBullet at every 1e-3 rad.
+- So is a curve the compiled curve proof passes (a motion that bows away from the chords
+  between its knots, as a smooth timing's does), and curves that touch while their chords
+  are clear are refused: the proof counts the deviation.
 - At the smallest clearance allowed, no state the planner calls free touches anything in
   PyBullet (``performCollisionDetection`` + ``getContactPoints``, distance <= 0): the
   check accounts for Bullet's collision margin, on the shipped Panda and on an arm loaded
@@ -29,6 +32,7 @@ import armfleet
 from armfleet.checks.number_ranges import CLEARANCE_M
 from armfleet.messages import FloatArray
 from armfleet.planning.compiled_check import kernel_built
+from armfleet.planning.curve_check import CurveCertifier
 from armfleet.planning.path_check import PathCertifier
 from armfleet.planning.scene import CollisionChecker
 
@@ -44,6 +48,8 @@ AGREEMENT_STATES = 3000
 FREE_STATES = 2000
 #: Step of the dense re-check of a certified segment [rad, largest joint].
 DENSE_STEP_RAD = 1e-3
+#: Duration of the bowed test curves [s], and their knots (equal times apart).
+CURVE_S, CURVE_KNOTS = 1.0, 2
 
 
 @contextmanager
@@ -199,3 +205,51 @@ def test_at_the_smallest_clearance_no_free_state_touches_in_pybullet(model: str)
                     touching.append((state, found))
         assert free == FREE_STATES
         assert touching == []
+
+
+def bowed(start: FloatArray, end: FloatArray, bow: FloatArray, times: FloatArray) -> FloatArray:
+    """A curve from ``start`` to ``end`` in :data:`CURVE_S` that bows out by ``bow`` mid-way
+    (per joint ``4 bow u (1 - u)`` off the straight line, ``u = t / CURVE_S``): its
+    acceleration is ``8 |bow| / CURVE_S^2``, constant."""
+    u = (times / CURVE_S)[:, None]
+    return start + u * (end - start) + 4.0 * bow * u * (1.0 - u)
+
+
+def test_curves_the_compiled_proof_passes_are_clear_and_bows_into_things_are_refused(
+    cell: armfleet.World,
+) -> None:
+    """Curves of one chord each, bowing off it by up to a few tenths of a radian: the proof
+    must count the deviation, or curves that touch pass on their chord's proof."""
+    arms = ("bob", "toby")
+    contacts = PyBulletContacts(cell, arms)
+    generator = np.random.default_rng(5)
+    knot_times = np.linspace(0.0, CURVE_S, CURVE_KNOTS)
+    passed, bowed_into_something, rechecked = 0, 0, 0
+    try:
+        with planning_checker(cell, arms, CLEARANCE_M.low) as checker:
+            chords = PathCertifier(checker)
+            for index, start in enumerate(random_states(cell, arms, 1500, seed=6)):
+                if passed >= 6 and bowed_into_something >= 2:
+                    break
+                if not checker.valid(start):
+                    continue
+                direction = generator.normal(size=start.size)
+                end = start + 0.3 * direction / np.abs(direction).max()
+                bow = generator.normal(size=start.size) * (0.02 if index % 2 else 0.1)
+                knots = bowed(start, end, bow, knot_times)
+                curve = CurveCertifier(checker, 8.0 * np.abs(bow) / CURVE_S**2 + 1e-12)
+                verdict = curve.first_failure(knots, CURVE_S / (CURVE_KNOTS - 1))
+                count = int(np.ceil(np.abs(end - start).max() / DENSE_STEP_RAD))
+                dense = bowed(start, end, bow, np.linspace(0.0, CURVE_S, count + 1))
+                if verdict is None:
+                    passed += 1
+                    for state in dense:
+                        rechecked += 1
+                        assert contacts.touching(state) == []
+                elif chords.first_failure(knots) is None and any(
+                    contacts.touching(state) for state in dense[::4]
+                ):
+                    bowed_into_something += 1  # its chords are clear, the curve is not
+    finally:
+        contacts.put(np.concatenate([cell.arm(a).positions for a in arms]))
+    assert passed >= 6 and bowed_into_something >= 2 and rechecked > 6 * 250

@@ -81,10 +81,16 @@ class CurveCertifier:
 
         Each knot is checked (far, else against the clearance); each chord is walked in
         the far margins' steps, and again in the clearance's steps where an end is not
-        far.
+        far. The compiled check walks all chords in one call, in steps sized by the
+        distances it finds, each pair's slack less what the deviation can take of it.
         """
         checker = self._checker
         deviation = self.deviation(period)
+        if checker.compiled is not None:
+            found = checker.compiled.first_failure(
+                np.ascontiguousarray(knots, dtype=float), True, deviation
+            )
+            return None if found is None else (int(found[0]), np.asarray(found[1]))
         far_before = checker.far(knots[0])
         if not far_before and not checker.valid(knots[0]):
             return 0, knots[0]
