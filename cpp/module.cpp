@@ -59,6 +59,8 @@ NB_MODULE(_fleet_kernel, module) {
            nb::arg("near_between"), nb::arg("near_within"), nb::arg("far_between"),
            nb::arg("far_within"))
       .def("clear", &SceneCheck::clear, nb::arg("state"), nb::arg("far") = false, release())
+      .def("clear_motion", &SceneCheck::clear_motion, nb::arg("start"), nb::arg("end"),
+           nb::arg("segments"), release())
       .def("first_failure", &SceneCheck::first_failure, nb::arg("path"),
            nb::arg("adaptive") = true, nb::arg("deviation") = Eigen::VectorXd(), release())
       .def_rw("checks", &SceneCheck::checks)

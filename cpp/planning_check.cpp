@@ -566,6 +566,26 @@ bool SceneCheck::clear(const Eigen::VectorXd& state, bool far) {
   return true;
 }
 
+bool SceneCheck::clear_motion(const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                              std::int64_t segments) {
+  if (from.size() != to.size() || segments < 1)
+    throw std::invalid_argument("a motion is two states of one size and at least one segment");
+  if (!clear(to, false)) return false;
+  // The states between, halves first (OMPL's order: a motion through something usually
+  // fails at one of its first few).
+  std::vector<std::pair<std::int64_t, std::int64_t>> spans{{1, segments - 1}};
+  for (std::size_t next = 0; next < spans.size(); ++next) {
+    const auto [low, high] = spans[next];
+    if (low > high) continue;
+    const std::int64_t middle = (low + high) / 2;
+    const double fraction = static_cast<double>(middle) / static_cast<double>(segments);
+    if (!clear(Eigen::VectorXd(from + fraction * (to - from)), false)) return false;
+    spans.emplace_back(low, middle - 1);
+    spans.emplace_back(middle + 1, high);
+  }
+  return true;
+}
+
 std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failure(
     const RowMatrix& path, bool adaptive, const Eigen::VectorXd& deviation) {
   if (adaptive) return first_failure_adaptive(path, deviation);

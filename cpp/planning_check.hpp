@@ -58,6 +58,11 @@ class SceneCheck {
 
   // Whether ``state`` keeps every pair's margin (``far``: its far margin).
   bool clear(const Eigen::VectorXd& state, bool far);
+  // Whether ``to`` and the states that cut the straight motion from ``from`` into
+  // ``segments`` equal parts keep the clearance (the middle ones first): OMPL's discrete
+  // motion check, in one call.
+  bool clear_motion(const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                    std::int64_t segments);
   // The first (segment, state) of ``path`` (rows) not proven clear, or none: with steps
   // sized by the distances found (``adaptive``), or path_check.py's walk, step for step.
   // With a ``deviation`` (per planned joint, adaptive only): of a curve through the rows
