@@ -62,7 +62,7 @@ NB_MODULE(_fleet_kernel, module) {
       .def("clear_motion", &SceneCheck::clear_motion, nb::arg("start"), nb::arg("end"),
            nb::arg("segments"), release())
       .def("first_failure", &SceneCheck::first_failure, nb::arg("path"),
-           nb::arg("adaptive") = true, nb::arg("deviation") = Eigen::VectorXd(), release())
+           nb::arg("adaptive") = true, nb::arg("deviation") = armfleet::RowMatrix(), release())
       .def_rw("checks", &SceneCheck::checks)
       .def_rw("pairs_by_volume", &SceneCheck::pairs_by_volume)
       .def_rw("pairs_by_coal", &SceneCheck::pairs_by_coal);

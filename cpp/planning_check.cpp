@@ -587,7 +587,7 @@ bool SceneCheck::clear_motion(const Eigen::VectorXd& from, const Eigen::VectorXd
 }
 
 std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failure(
-    const RowMatrix& path, bool adaptive, const Eigen::VectorXd& deviation) {
+    const RowMatrix& path, bool adaptive, const RowMatrix& deviation) {
   if (adaptive) return first_failure_adaptive(path, deviation);
   if (deviation.size() != 0)
     throw std::invalid_argument("a curve (a deviation from the chords) is proven adaptively only");
@@ -654,26 +654,27 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
 // must also keep the clearance (clear()).
 //
 // A curve through the rows (a motion that bends away from its chords, each joint within
-// ``deviation`` of the chord between two rows at the same fraction of it) is proven the same
-// way with each pair's slack less D_p = sum_k w_pk deviation_k, how much nearer the curve
+// ``deviation`` of the chord between two rows at the same fraction of it: one row for every
+// chord, or one per chord) is proven the same way with each pair's slack less
+// D_p = sum_k w_pk deviation_k, how much nearer the curve
 // can bring the pair than the chord does: between two checked states the chord keeps at
 // least (s_p(t0) + s_p(t1) - (t1 - t0) W_p) / 2, so the curve keeps more than 0 when
 // (t1 - t0) W_p <= (s_p(t0) - D_p) + (s_p(t1) - D_p). The rows themselves are on the curve.
 std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failure_adaptive(
-    const RowMatrix& path, const Eigen::VectorXd& deviation) {
+    const RowMatrix& path, const RowMatrix& deviation) {
   Impl& scene = *impl_;
   const Eigen::Index n = static_cast<Eigen::Index>(scene.planned.size());
   if (path.cols() != n || path.rows() < 1)
     throw std::invalid_argument("a path is rows of one value per planned joint");
-  if (deviation.size() != 0 && (deviation.size() != n || !(deviation.array() >= 0.0).all()))
-    throw std::invalid_argument("a deviation is one value >= 0 per planned joint");
+  const bool curved = deviation.size() != 0;
+  if (curved && (deviation.cols() != n || !(deviation.array() >= 0.0).all() ||
+                 (deviation.rows() != 1 && deviation.rows() != path.rows() - 1)))
+    throw std::invalid_argument(
+        "a deviation is one value >= 0 per planned joint, in one row or one per chord");
   scene.update_weights();
   using Failure = std::optional<std::pair<std::int64_t, Eigen::VectorXd>>;
   const std::size_t count = scene.pairs.size();
   std::vector<double> slack(count), next_slack(count), closing(count), bent(count, 0.0);
-  if (deviation.size() != 0)
-    for (std::size_t p = 0; p < count; ++p)
-      bent[p] = scene.weights.row(static_cast<Eigen::Index>(p)).dot(deviation);
   std::vector<bool> exact(count), next_exact(count);
   // A pair whose exact slack the deviation takes more than half the clearance of at a checked
   // state: the steps would shrink toward nothing there; the curve is refused instead.
@@ -744,6 +745,11 @@ std::optional<std::pair<std::int64_t, Eigen::VectorXd>> SceneCheck::first_failur
     const Eigen::VectorXd motion = (end - start).cwiseAbs();
     for (std::size_t p = 0; p < count; ++p)
       closing[p] = scene.weights.row(static_cast<Eigen::Index>(p)).dot(motion);
+    if (curved) {
+      const Eigen::Index row = deviation.rows() == 1 ? 0 : index;
+      for (std::size_t p = 0; p < count; ++p)
+        bent[p] = scene.weights.row(static_cast<Eigen::Index>(p)).dot(deviation.row(row));
+    }
     scene.place(start);
     double t = 0.0;
     double reach = measure(slack, exact, 1.0, nullptr, 0.0);

@@ -65,10 +65,11 @@ class SceneCheck {
                     std::int64_t segments);
   // The first (segment, state) of ``path`` (rows) not proven clear, or none: with steps
   // sized by the distances found (``adaptive``), or path_check.py's walk, step for step.
-  // With a ``deviation`` (per planned joint, adaptive only): of a curve through the rows
-  // that stays that close to the chord between two rows, joint by joint.
+  // With a ``deviation`` (per planned joint, adaptive only; one row, or one per chord): of a
+  // curve through the rows that stays that close to the chord between two rows, joint by
+  // joint.
   std::optional<std::pair<std::int64_t, Eigen::VectorXd>> first_failure(
-      const RowMatrix& path, bool adaptive, const Eigen::VectorXd& deviation);
+      const RowMatrix& path, bool adaptive, const RowMatrix& deviation);
   // Pairs settled by the bounding volumes, and by coal, since the count was reset.
   std::int64_t checks = 0;
   std::int64_t pairs_by_volume = 0;
@@ -76,7 +77,7 @@ class SceneCheck {
 
  private:
   std::optional<std::pair<std::int64_t, Eigen::VectorXd>> first_failure_adaptive(
-      const RowMatrix& path, const Eigen::VectorXd& deviation);
+      const RowMatrix& path, const RowMatrix& deviation);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

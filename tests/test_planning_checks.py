@@ -7,6 +7,8 @@
 - So is a curve the compiled curve proof passes (a motion that bows away from the chords
   between its knots, as a smooth timing's does), and curves that touch while their chords
   are clear are refused: the proof counts the deviation.
+- The bound on a chord's deviation from its knots' accelerations holds for Ruckig's curves
+  sampled every millisecond.
 - At the smallest clearance allowed, no state the planner calls free touches anything in
   PyBullet (``performCollisionDetection`` + ``getContactPoints``, distance <= 0): the
   check accounts for Bullet's collision margin, on the shipped Panda and on an arm loaded
@@ -34,7 +36,9 @@ from armfleet.messages import FloatArray
 from armfleet.planning.compiled_check import kernel_built
 from armfleet.planning.curve_check import CurveCertifier
 from armfleet.planning.path_check import PathCertifier
+from armfleet.planning.path_timing import JointLimits
 from armfleet.planning.scene import CollisionChecker
+from armfleet.planning.smooth_timing import CurvedSegment
 
 pytestmark = pytest.mark.skipif(not kernel_built(), reason="the compiled kernel is not built")
 
@@ -253,3 +257,36 @@ def test_curves_the_compiled_proof_passes_are_clear_and_bows_into_things_are_ref
     finally:
         contacts.put(np.concatenate([cell.arm(a).positions for a in arms]))
     assert passed >= 6 and bowed_into_something >= 2 and rechecked > 6 * 250
+
+
+def test_a_chords_deviation_bound_holds_for_ruckigs_motions(cell: armfleet.World) -> None:
+    """The bound from the knots' accelerations and the jerk limit, against Ruckig's curves
+    sampled every millisecond: no joint strays further from a chord than its bound."""
+    arms = ("bob", "toby")
+    limits = JointLimits(np.full(14, 2.0), np.full(14, 5.0), np.full(14, 50.0))
+    generator = np.random.default_rng(7)
+    tight = 0
+    with planning_checker(cell, arms, 0.01) as checker:
+        certifier = CurveCertifier(checker, limits.acceleration, limits.jerk)
+        for _ in range(20):
+            start, end = generator.uniform(-1.0, 1.0, (2, 14))
+            speeds = generator.uniform(-1.0, 1.0, (2, 14)) * (np.sign(end - start) != 0)
+            try:
+                segment = CurvedSegment(start, end, speeds[0], speeds[1], limits)
+            except ValueError:
+                continue
+            count = max(1, int(np.ceil(segment.duration / certifier.knot_period)))
+            times = np.linspace(0.0, segment.duration, count + 1)
+            knots, _, accelerations = segment.at(times)
+            bounds = certifier.chord_deviations(segment.duration / count, accelerations)
+            worst = certifier.chord_deviations(segment.duration / count, None)[0]
+            for k in range(count):
+                dense = np.linspace(times[k], times[k + 1], 60)
+                states = segment.at(dense)[0]
+                u = ((dense - times[k]) / (times[k + 1] - times[k]))[:, None]
+                chord = knots[k] + u * (knots[k + 1] - knots[k])
+                strayed = np.abs(states - chord).max(axis=0)
+                assert np.all(strayed <= bounds[k] + 1e-12)
+                assert np.all(bounds[k] <= worst + 1e-15)
+                tight += int(np.any(bounds[k] < 0.5 * worst))
+    assert tight > 0  # the knots' accelerations do tighten the bound somewhere

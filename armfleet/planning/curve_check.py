@@ -45,15 +45,24 @@ class CurveCertifier:
         checker: the request's collision checker (its scene's margins must be > 0).
         max_acceleration: per joint of a state, a bound on |q''| along the curves
             [rad/s^2].
+        max_jerk: per joint, a bound on the curves' jerk [rad/s^3], if they keep one:
+            then a chord's deviation is bounded from the accelerations at its two knots
+            (:meth:`chord_deviations`), not from ``max_acceleration`` alone.
     """
 
-    def __init__(self, checker: CollisionChecker, max_acceleration: FloatArray) -> None:
+    def __init__(
+        self,
+        checker: CollisionChecker,
+        max_acceleration: FloatArray,
+        max_jerk: FloatArray | None = None,
+    ) -> None:
         scene = checker.scene
         if not (scene.clearance_m > 0.0 and scene.self_clearance_m > 0.0):
             raise ValueError("a contact-free proof needs margins > 0")
         self._checker = checker
         self._levers = joint_levers(checker)
         self._acceleration = np.asarray(max_acceleration, dtype=float)
+        self._jerk = None if max_jerk is None else np.asarray(max_jerk, dtype=float)
         self._near = (scene.clearance_m, scene.self_clearance_m)
         self._far = (scene.far_clearance_m, scene.far_self_clearance_m)
         sizes = [scene.columns(arm).size for arm in checker.arms]
@@ -69,6 +78,21 @@ class CurveCertifier:
         bound: FloatArray = self._acceleration * period**2 / 8.0
         return bound
 
+    def chord_deviations(self, period: float, accelerations: FloatArray | None) -> FloatArray:
+        """Per chord (rows) and joint: how far the curve can be from the chord between two
+        knots ``period`` seconds apart [rad].
+
+        With the knots' ``accelerations`` (rows) and a jerk bound ``J``, the acceleration
+        between two knots is at most ``(|a_k| + |a_k+1| + J period) / 2`` (it changes by at
+        most ``J`` per second from either end), and never more than ``max_acceleration``;
+        without them, ``max_acceleration`` throughout (one row for every chord)."""
+        if accelerations is None or self._jerk is None:
+            return self.deviation(period)[None, :]
+        ends = np.abs(np.asarray(accelerations, dtype=float))
+        between = (ends[:-1] + ends[1:] + self._jerk * period) / 2.0
+        bound: FloatArray = np.minimum(between, self._acceleration) * period**2 / 8.0
+        return bound
+
     def steps(self, start: FloatArray, end: FloatArray, deviation: FloatArray, far: bool) -> int:
         """Equal steps along the chord from ``start`` to ``end`` that prove the curve within
         ``deviation`` of it, with the near (or far) margins (at least 1)."""
@@ -82,9 +106,13 @@ class CurveCertifier:
         needed = max(float(moved.sum()) / room_between, float(np.max(moved / room_within)))
         return max(1, math.ceil(needed))
 
-    def first_failure(self, knots: FloatArray, period: float) -> tuple[int, FloatArray] | None:
+    def first_failure(
+        self, knots: FloatArray, period: float, accelerations: FloatArray | None = None
+    ) -> tuple[int, FloatArray] | None:
         """The first knot interval (``knots[k]`` to ``knots[k + 1]``, at most ``period``
         seconds apart along the curve) not proven clear, and the state that failed, or None.
+        ``accelerations``: the curve's at the knots (rows), which bound each chord's
+        deviation more tightly (:meth:`chord_deviations`).
 
         Each knot is checked (far, else against the clearance); each chord is walked in
         the far margins' steps, and again in the clearance's steps where an end is not
@@ -92,10 +120,10 @@ class CurveCertifier:
         distances it finds, each pair's slack less what the deviation can take of it.
         """
         checker = self._checker
-        deviation = self.deviation(period)
+        deviations = self.chord_deviations(period, accelerations)
         if checker.compiled is not None:
             found = checker.compiled.first_failure(
-                np.ascontiguousarray(knots, dtype=float), True, deviation
+                np.ascontiguousarray(knots, dtype=float), True, np.ascontiguousarray(deviations)
             )
             return None if found is None else (int(found[0]), np.asarray(found[1]))
         far_before = checker.far(knots[0])
@@ -103,6 +131,7 @@ class CurveCertifier:
             return 0, knots[0]
         for index in range(len(knots) - 1):
             start, end = knots[index], knots[index + 1]
+            deviation = deviations[min(index, len(deviations) - 1)]
             count = self.steps(start, end, deviation, far=True)
             grid = start + np.linspace(0.0, 1.0, count + 1)[:, None] * (end - start)
             for k in range(count):

@@ -1,7 +1,8 @@
 """From a :class:`PlanningProblem` to a proven-clear joint path, or a :class:`PlanningFailed`.
 
 1. The start and the goal must keep the clearance (else the pair is named).
-2. The straight line is tried first: if it is proven clear, it is the path.
+2. The straight line is tried first: if the states the search would check on it are
+   clear and it is proven clear, it is the path.
 3. Otherwise the search (OMPL's RRT-Connect, then its simplifier) runs within the
    time budget, and its path must pass :class:`PathCertifier`; a path that fails is
    searched again, with motions checked finer, while time remains.
@@ -9,6 +10,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -75,7 +77,7 @@ def find_path(
     certifier = PathCertifier(checker)
     straight = np.array([problem.start, problem.goal])
     began = time.perf_counter()
-    if certifier.first_failure(straight) is None:
+    if _may_be_clear(problem, search) and certifier.first_failure(straight) is None:
         seconds["certify"] = time.perf_counter() - began
         return JointPath(straight, 0, checker.checks - checks_before, seconds)
     seconds["certify"] = time.perf_counter() - began
@@ -113,6 +115,22 @@ def find_path(
         arms=problem.arms,
         samples=samples,
         problem=problem,
+    )
+
+
+def _may_be_clear(problem: PlanningProblem, search: OmplRrtConnect) -> bool:
+    """Whether the straight line from start to goal is worth proving: the states the
+    search's motion check would try on it, middle ones first, are clear (a line through
+    something usually fails at one of its first few, where the proof would walk up to it).
+    Without the compiled check, always (the proof is then the only walk)."""
+    compiled = problem.checker.compiled
+    if compiled is None:
+        return True
+    extent = float(np.linalg.norm(problem.upper - problem.lower))
+    segment = search.resolution * extent
+    length = float(np.linalg.norm(problem.goal - problem.start))
+    return bool(
+        compiled.clear_motion(problem.start, problem.goal, max(1, math.ceil(length / segment)))
     )
 
 

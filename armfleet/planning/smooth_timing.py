@@ -123,7 +123,7 @@ class SmoothPath(TimedSegments):
     ) -> None:
         points = np.asarray(waypoints, dtype=float)
         self._limits = limits
-        certifier = CurveCertifier(checker, limits.acceleration)
+        certifier = CurveCertifier(checker, limits.acceleration, limits.jerk)
         straight = [StraightSegment(a, b, limits) for a, b in itertools.pairwise(points)]
         velocities = pass_through_velocities(points, straight, limits)
         halvings = np.zeros(len(points), dtype=int)
@@ -150,7 +150,7 @@ class SmoothPath(TimedSegments):
 
     def first_unclear(self, checker: CollisionChecker) -> FloatArray | None:
         """A state of the executed motion ``checker`` does not prove clear, or None."""
-        certifier = CurveCertifier(checker, self._limits.acceleration)
+        certifier = CurveCertifier(checker, self._limits.acceleration, self._limits.jerk)
         straight = PathCertifier(checker)
         for k, segment in enumerate(self._segments):
             a, b = self.waypoints[k], self.waypoints[k + 1]
@@ -212,7 +212,7 @@ def _first_failure(
     """The first state of ``segment`` (from ``start``) not proven clear, or None."""
     count = max(1, int(np.ceil(segment.duration / certifier.knot_period)))
     times = np.linspace(0.0, segment.duration, count + 1)
-    knots = segment.at(times)[0]
+    knots, _, accelerations = segment.at(times)
     knots[0] = start
-    failure = certifier.first_failure(knots, segment.duration / count)
+    failure = certifier.first_failure(knots, segment.duration / count, accelerations)
     return None if failure is None else failure[1]
