@@ -251,6 +251,15 @@ struct SceneCheck::Impl {
   std::vector<Pose> joint_poses;
   std::vector<Geometry> geometries;
   std::vector<Pair> pairs;
+  // The spheres' test, compact: per geometry its sphere's centre where it is; per pair its
+  // two geometries and the squared distance between centres beyond which the spheres
+  // settle it (the radii and the margin, near and far).
+  std::vector<Vec3> centers;
+  std::vector<std::int32_t> pair_first, pair_second;
+  std::vector<double> settled_near, settled_far;
+  // The pair that last found a state not clear, asked first: states checked one after the
+  // other are near each other, and a state through something is usually through the same.
+  std::size_t last_hit = 0;
   Eigen::VectorXd q;
   std::vector<std::int64_t> planned;
   Eigen::VectorXd levers;
@@ -306,6 +315,7 @@ struct SceneCheck::Impl {
     moving_geometries.clear();
     for (std::size_t g = 0; g < geometries.size(); ++g) {
       place_geometry(geometries[g]);
+      centers[g] = geometries[g].world_center;
       if (moves[geometries[g].joint]) moving_geometries.push_back(g);
     }
   }
@@ -313,7 +323,10 @@ struct SceneCheck::Impl {
   void place(const Eigen::VectorXd& state) {
     for (std::size_t k = 0; k < planned.size(); ++k) q[planned[k]] = state[k];
     for (std::size_t j : moving_joints) place_joint(j);
-    for (std::size_t g : moving_geometries) place_geometry(geometries[g]);
+    for (std::size_t g : moving_geometries) {
+      place_geometry(geometries[g]);
+      centers[g] = geometries[g].world_center;
+    }
   }
 
   // Per geometry and planned joint, a bound on how far a point of the geometry moves per
@@ -467,6 +480,7 @@ std::int64_t SceneCheck::add_geometry(std::int64_t joint, const std::vector<doub
   geometry.radius = geometry.radius * (1.0 + 1e-9) + 1e-12;
   if (kind != 4) geometry.shape->computeLocalAABB();
   impl_->geometries.push_back(std::move(geometry));
+  impl_->centers.emplace_back(Vec3::Zero());
   impl_->place_all();
   return static_cast<std::int64_t>(impl_->geometries.size()) - 1;
 }
@@ -480,6 +494,7 @@ void SceneCheck::set_placement(std::int64_t geometry, const std::vector<double>&
   if (item.joint == 0) item.world = item.placement;
   else impl_->weights_stale = true;  // a held object, elsewhere in the hand
   impl_->place_geometry(item);
+  impl_->centers[static_cast<std::size_t>(geometry)] = item.world_center;
 }
 
 void SceneCheck::set_pairs(const std::vector<std::int64_t>& first,
@@ -503,6 +518,17 @@ void SceneCheck::set_pairs(const std::vector<std::int64_t>& first,
     impl_->pairs.push_back(Pair{first[k], second[k], margins[k], far_margins[k], grown[k],
                                 std::make_unique<coal::ComputeCollision>(a, b), nullptr});
   }
+  impl_->pair_first.clear(), impl_->pair_second.clear();
+  impl_->settled_near.clear(), impl_->settled_far.clear();
+  for (const Pair& pair : impl_->pairs) {
+    const double radii =
+        impl_->geometries[pair.first].radius + impl_->geometries[pair.second].radius;
+    impl_->pair_first.push_back(static_cast<std::int32_t>(pair.first));
+    impl_->pair_second.push_back(static_cast<std::int32_t>(pair.second));
+    impl_->settled_near.push_back(std::pow(radii + pair.margin + 1e-6, 2));
+    impl_->settled_far.push_back(std::pow(radii + pair.far_margin + 1e-6, 2));
+  }
+  impl_->last_hit = 0;
   impl_->weights_stale = true;
 }
 
@@ -543,25 +569,45 @@ bool SceneCheck::clear(const Eigen::VectorXd& state, bool far) {
     throw std::invalid_argument("a state has one value per planned joint");
   ++checks;
   scene.place(state);
-  for (Pair& pair : scene.pairs) {
+  const std::size_t count = scene.pairs.size();
+  const std::vector<double>& settled = far ? scene.settled_far : scene.settled_near;
+  // Whether pair ``p`` keeps its margin: the spheres (squared, compact), then the capsules
+  // and boxes, then coal, asked as Pinocchio's computeCollision asks it.
+  auto keeps = [&](std::size_t p) {
+    if ((scene.centers[scene.pair_first[p]] - scene.centers[scene.pair_second[p]])
+            .squaredNorm() > settled[p]) {
+      ++pairs_by_volume;
+      return true;
+    }
+    Pair& pair = scene.pairs[p];
     const Geometry& a = scene.geometries[pair.first];
     const Geometry& b = scene.geometries[pair.second];
     const double margin = far ? pair.far_margin : pair.margin;
     if (volume_distance(a, b, margin + 1e-6) > margin + 1e-6) {
       ++pairs_by_volume;
-      continue;
+      return true;
     }
     ++pairs_by_coal;
     coal::CollisionRequest& request = scene.request;
     request.security_margin = margin;
-    request.distance_upper_bound = margin + 1e-6;  // as Pinocchio's computeCollision
+    request.distance_upper_bound = margin + 1e-6;
     request.cached_gjk_guess = pair.guess;
     request.cached_support_func_guess = pair.support_guess;
     coal::CollisionResult result;
     (*pair.collide)(coal_pose(a.world), coal_pose(b.world), request, result);
     pair.guess = result.cached_gjk_guess;
     pair.support_guess = result.cached_support_func_guess;
-    if (result.isCollision()) return false;
+    return !result.isCollision();
+  };
+  if (count == 0) return true;
+  const std::size_t first = scene.last_hit < count ? scene.last_hit : 0;
+  if (!keeps(first)) return false;
+  for (std::size_t p = 0; p < count; ++p) {
+    if (p == first) continue;
+    if (!keeps(p)) {
+      scene.last_hit = p;
+      return false;
+    }
   }
   return true;
 }
