@@ -72,6 +72,14 @@ class CurveCertifier:
         #: Time between knots [s]: the deviation from the chords is at most
         #: ``DEVIATION_SHARE`` of the smallest margin (all arms together).
         self.knot_period = math.sqrt(8.0 * DEVIATION_SHARE * smallest / max(spread, 1e-12))
+        self._allowed = DEVIATION_SHARE * smallest
+
+    def within_share(self, deviations: FloatArray) -> bool:
+        """Whether chords of ``deviations`` (rows, :meth:`chord_deviations`) keep the
+        deviation within :data:`DEVIATION_SHARE` of the smallest margin, as knots
+        :attr:`knot_period` apart always do."""
+        reach = np.asarray(deviations, dtype=float) @ self._levers
+        return bool(np.all(reach <= self._allowed))
 
     def deviation(self, period: float) -> FloatArray:
         """Per joint: how far the curve can be from the chord of ``period`` seconds [rad]."""
