@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -236,6 +237,8 @@ std::shared_ptr<coal::CollisionGeometry> shared_hull(const RowMatrix& points) {
   std::shared_ptr<coal::CollisionGeometry> hull(coal::ConvexBase::convexHull(
       vertices, static_cast<unsigned int>(vertices->size()), true, "Qt"));
   hull->computeLocalAABB();
+  for (auto entry = hulls.begin(); entry != hulls.end();)  // hulls no checker holds now
+    entry = entry->second.expired() ? hulls.erase(entry) : std::next(entry);
   hulls[key] = hull;
   return hull;
 }
