@@ -1,8 +1,10 @@
 """Shared fixtures: DIRECT-mode worlds, a bob/toby pair, the model library; a failing test's
-recordings and tracking plots saved to ``test-artifacts/<test id>/``."""
+recordings and tracking plots saved to ``test-artifacts/<test id>/``; the slowest files
+started first (tests/file_order.py)."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,9 +17,26 @@ from armfleet.description import ModelLibrary
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.spec import ArmSpec, FleetSpec
 from tests.failure_artifacts import artifacts_root, folder_for, save_artifacts
+from tests.file_order import slowest_files_first
 
 #: The recordings a test registered with ``keep_on_failure``.
 KEPT_RECORDINGS = pytest.StashKey[list[Path]]()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    # xdist would start the files with the most tests first, not the order collected.
+    if hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+    # The suite starts hundreds of Python processes (the CLI, worlds, benchmarks, Ray's
+    # workers). Where PYTHONDONTWRITEBYTECODE is set, none of them caches armfleet's
+    # bytecode, so each compiles its modules from source again: a fifth of the CPU of a
+    # CLI command. They may cache it in __pycache__ (git-ignored), as Python does by
+    # default; what runs is the same. Set here, before xdist starts its workers.
+    os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    slowest_files_first(items)
 
 
 @pytest.fixture(scope="session")

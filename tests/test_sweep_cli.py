@@ -136,7 +136,9 @@ def test_an_interrupted_sweep_keeps_its_runs_and_resume_runs_only_the_rest(
     started.mkdir()
     (tmp_path / "gated.py").write_text(GATED_TASK.format(folder=str(started), gate=str(gate)))
     results = tmp_path / "r.parquet"
-    runs = 40
+    # The gate holds every run after the sixth until the Ctrl-C, so at most 6 finished and
+    # 3 in flight (2 workers + 1 queued) can be kept: 12 runs leave some for --resume.
+    runs = 12
     command = [*ARMFLEET, "sweep", str(sweep), "--runs", str(runs), "-o", str(results)]
     process = subprocess.Popen(
         [*command, "--workers", "2", "--batch-size", "1", "--quiet"],

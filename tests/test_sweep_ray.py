@@ -1,4 +1,4 @@
-"""A 40-run ``reach`` sweep on a local Ray instance with 2 CPUs completes, and its rows
+"""A 12-run ``reach`` sweep on a local Ray instance with 2 CPUs completes, and its rows
 equal a plain in-process loop over the same seeds, bit for bit (parameters and metrics);
 re-running one row gives it again."""
 
@@ -15,7 +15,10 @@ import armfleet
 from armfleet.sweeps import load_sweep, run_seed
 from armfleet.sweeps.results_schema import SweepMetadata
 
-RUNS = 40
+#: Enough seeds for every arm count (2, 3 and 4 arms), batches on both of the two
+#: workers, and arms that reach; every run is done twice (on Ray, then in the plain loop),
+#: so more seeds only repeat the same comparison.
+RUNS = 12
 
 
 def same(a: Any, b: Any) -> bool:
@@ -51,8 +54,8 @@ def test_a_reach_sweep_on_ray_equals_a_plain_loop(tmp_path: Path) -> None:
         for metric in metadata.metrics:
             assert same(plain["metrics"][metric], row[metric]), (seed, metric)
         assert row["sim_time_s"] == plain["sim_time_s"]  # the same simulation, step for step
-    again = run_seed(definition, 17, task)  # one row re-run: the same metrics again
-    assert again["metrics"] == {m: rows[17][m] for m in metadata.metrics}
+    again = run_seed(definition, 7, task)  # one row re-run: the same metrics again
+    assert again["metrics"] == {m: rows[7][m] for m in metadata.metrics}
     # physics, not bookkeeping: an arm that reached tracked its reference within 1 mrad
     reached = [row for row in rows.values() if row["reached_fraction"] == 1.0]
     assert reached and all(row["max_tracking_error_rad"] < 1e-3 for row in reached)
