@@ -20,6 +20,9 @@ import pytest
 #: Seconds a file took, roughly (two workers on two cores), for the files over ~10 s. The
 #: Ray sweeps (sweep_*) are kept apart, so that the workers seldom run two at once.
 SLOW_FILES = {
+    # On a fresh clone the wheel test compiles the fleet kernel again (67 s in CI): last,
+    # it was the run's tail.
+    "test_description.py": 75,
     "test_readme.py": 61,
     "test_recover.py": 60,
     "test_envs.py": 53,
@@ -33,6 +36,7 @@ SLOW_FILES = {
     "test_cartesian.py": 28.5,
     "test_sweep_cli.py": 28,
     "test_continuous_joints.py": 25,
+    "test_own_robot.py": 25,
     "test_cli_planning.py": 25,
     "test_shared_cell_example.py": 23,
     "test_planning.py": 22,
