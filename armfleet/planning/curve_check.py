@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from armfleet.messages import FloatArray
-from armfleet.planning.path_check import joint_levers
+from armfleet.planning.path_check import joint_levers, walk
 from armfleet.planning.scene import CollisionChecker
 
 #: Share of the smallest margin the deviation from the chords may take: fewer knots for a
@@ -134,24 +134,9 @@ class CurveCertifier:
                 np.ascontiguousarray(knots, dtype=float), True, np.ascontiguousarray(deviations)
             )
             return None if found is None else (int(found[0]), np.asarray(found[1]))
-        far_before = checker.far(knots[0])
-        if not far_before and not checker.valid(knots[0]):
-            return 0, knots[0]
-        for index in range(len(knots) - 1):
-            start, end = knots[index], knots[index + 1]
-            deviation = deviations[min(index, len(deviations) - 1)]
-            count = self.steps(start, end, deviation, far=True)
-            grid = start + np.linspace(0.0, 1.0, count + 1)[:, None] * (end - start)
-            for k in range(count):
-                a, b = grid[k], grid[k + 1]
-                far_after = checker.far(b)
-                if not far_after and not checker.valid(b):
-                    return index, b
-                if not (far_before and far_after):
-                    fine = self.steps(a, b, deviation, far=False)
-                    for s in np.arange(1, fine) / fine:
-                        state = a + s * (b - a)
-                        if not checker.valid(state):
-                            return index, state
-                far_before = far_after
-        return None
+        last = len(deviations) - 1
+        return walk(
+            checker,
+            knots,
+            lambda index, a, b, far: self.steps(a, b, deviations[min(index, last)], far),
+        )

@@ -26,6 +26,7 @@ once per scene and held objects' placements, not per request.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -133,23 +134,39 @@ class PathCertifier:
         if checker.compiled is not None:
             found = checker.compiled.first_failure(np.ascontiguousarray(path, dtype=float))
             return None if found is None else (int(found[0]), np.asarray(found[1]))
-        far_before = checker.far(path[0])
-        if not far_before and not checker.valid(path[0]):
-            return 0, path[0]
-        for index in range(len(path) - 1):
-            start, end = path[index], path[index + 1]
-            count = self.steps(start, end, far=True)
-            grid = start + np.linspace(0.0, 1.0, count + 1)[:, None] * (end - start)
-            for k in range(count):
-                a, b = grid[k], grid[k + 1]
-                far_after = checker.far(b)
-                if not far_after and not checker.valid(b):
-                    return index, b
-                if not (far_before and far_after):  # near something: the clearance's steps
-                    fine = self.steps(a, b)
-                    for s in np.arange(1, fine) / fine:
-                        state = a + s * (b - a)
-                        if not checker.valid(state):
-                            return index, state
-                far_before = far_after
-        return None
+        return walk(checker, path, lambda _, a, b, far: self.steps(a, b, far))
+
+
+#: Equal steps that prove the motion from ``a`` to ``b`` on segment ``index`` of a path
+#: (``steps(index, a, b, far)``), with the near (or far) margins.
+Steps = Callable[[int, FloatArray, FloatArray, bool], int]
+
+
+def walk(
+    checker: CollisionChecker, path: FloatArray, steps: Steps
+) -> tuple[int, FloatArray] | None:
+    """The first (segment index, state) of ``path`` not clear, walked in ``steps``, or None.
+
+    Each state is checked once: far first; a state that is not far is checked against the
+    clearance (and fails the path if it is not clear), and so are the states inside a far
+    step with such an end, in the clearance's steps."""
+    far_before = checker.far(path[0])
+    if not far_before and not checker.valid(path[0]):
+        return 0, path[0]
+    for index in range(len(path) - 1):
+        start, end = path[index], path[index + 1]
+        count = steps(index, start, end, True)
+        grid = start + np.linspace(0.0, 1.0, count + 1)[:, None] * (end - start)
+        for k in range(count):
+            a, b = grid[k], grid[k + 1]
+            far_after = checker.far(b)
+            if not far_after and not checker.valid(b):
+                return index, b
+            if not (far_before and far_after):  # near something: the clearance's steps
+                fine = steps(index, a, b, False)
+                for s in np.arange(1, fine) / fine:
+                    state = a + s * (b - a)
+                    if not checker.valid(state):
+                        return index, state
+            far_before = far_after
+    return None
