@@ -28,10 +28,14 @@ ARMFLEET = [sys.executable, "-m", "armfleet.cli.main"]
 RAY = Path(sys.executable).with_name("ray")
 
 
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
+def free_ports(count: int) -> list[int]:
+    """``count`` distinct free ports: every probe stays bound until all are chosen, since
+    the kernel may hand a just-closed port out again (CI once got one port twice)."""
+    with contextlib.ExitStack() as stack:
+        probes = [stack.enter_context(socket.socket()) for _ in range(count)]
+        for probe in probes:
+            probe.bind(("127.0.0.1", 0))
+        return [int(probe.getsockname()[1]) for probe in probes]
 
 
 @pytest.fixture(scope="module")
@@ -40,16 +44,14 @@ def head() -> Iterator[tuple[int, int, Path]]:
     # A short folder: Ray's Unix sockets live in it, and their paths may not exceed 107
     # bytes (a pytest-xdist worker's tmp_path is too deep).
     folder = Path(tempfile.mkdtemp(prefix="ray-", dir="/tmp"))
-    gcs, client = free_port(), free_port()
     # Every port the head opens is free and its own: a private local Ray instance of
     # another test (on the other pytest worker) holds Ray's default agent ports.
-    ports = [
-        f"--{option}={free_port()}"
-        for option in (
-            "node-manager-port", "object-manager-port", "dashboard-agent-listen-port",
-            "dashboard-agent-grpc-port", "runtime-env-agent-port", "metrics-export-port",
-        )
-    ]  # fmt: skip
+    options = (
+        "node-manager-port", "object-manager-port", "dashboard-agent-listen-port",
+        "dashboard-agent-grpc-port", "runtime-env-agent-port", "metrics-export-port",
+    )  # fmt: skip
+    gcs, client, *chosen = free_ports(2 + len(options))
+    ports = [f"--{option}={port}" for option, port in zip(options, chosen, strict=True)]
     env = {**os.environ, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}  # loopback only
     log = (folder / "ray-start.log").open("w")
     process = subprocess.Popen(
