@@ -255,10 +255,24 @@ def test_joint_states_and_tf_arrive_valid_against_their_advertised_schemas(
     client.close()
 
 
-def test_an_older_foxglove_websocket_v1_client_is_refused(served: Served) -> None:
+#: What the SDK answers a client offering only the older subprotocol, as docs/foxglove.md says.
+OLD_SUBPROTOCOL_REFUSAL = "Missing expected sec-websocket-protocol header"
+
+
+def test_an_older_foxglove_websocket_v1_client_is_refused_as_documented(served: Served) -> None:
+    """Lichtblick up to 1.21 and clients built on @foxglove/ws-protocol offer only
+    foxglove.websocket.v1: the SDK answers HTTP 400 with the body the docs quote; a client
+    offering both names (newer Lichtblick) gets foxglove.sdk.v1."""
     with pytest.raises(InvalidStatus) as refused:
         connect(served.server.url, subprotocols=[Subprotocol("foxglove.websocket.v1")], proxy=None)
-    assert refused.value.response.status_code == 400
+    response = refused.value.response
+    assert response.status_code == 400
+    assert bytes(response.body or b"").decode() == OLD_SUBPROTOCOL_REFUSAL
+    docs = (Path(__file__).parents[1] / "docs" / "foxglove.md").read_text()
+    assert f"HTTP 400 `{OLD_SUBPROTOCOL_REFUSAL}`" in docs
+    both = [Subprotocol("foxglove.websocket.v1"), SUBPROTOCOL]
+    with connect(served.server.url, subprotocols=both, proxy=None) as accepted:
+        assert accepted.subprotocol == SUBPROTOCOL
 
 
 def test_a_topic_costs_nothing_until_a_client_subscribes(served: Served) -> None:

@@ -63,7 +63,12 @@ def test_every_topic_is_recorded(recorded_run: RecordedRun, contents: Any) -> No
     recorded = {channel.topic for channel in summary.channels.values()}
     world_topics = set(recorded_run.topics)
     assert world_topics <= recorded, world_topics - recorded
-    assert recorded - world_topics == {"/bob/robot_description", "/toby/robot_description"}
+    assert recorded - world_topics == {
+        "/bob/robot_description",
+        "/toby/robot_description",
+        "/bob/robot_meshes",
+        "/toby/robot_meshes",
+    }
     # The topics published only for listeners were published (and recorded).
     assert {"/tf", "/bob/position_controller/state"} <= world_topics
 
@@ -77,9 +82,11 @@ def test_message_counts_are_those_published(recorded_run: RecordedRun, contents:
         channel.topic: summary.statistics.channel_message_counts.get(channel_id, 0)
         for channel_id, channel in summary.channels.items()
     }
-    assert {topic: n for topic, n in counts.items() if not topic.endswith("description")} == {
+    own = ("/robot_description", "/robot_meshes")  # the recorder's, not the bus's: one per arm
+    assert {topic: n for topic, n in counts.items() if not topic.endswith(own)} == {
         topic: published.get(topic, 0) for topic in recorded_run.topics
     }
+    assert all(n == 1 for topic, n in counts.items() if topic.endswith(own))
     assert all(len(by_topic[topic]) == n for topic, n in counts.items() if n)
 
 

@@ -20,7 +20,16 @@ collisions, bring-up, planned motions) goes out as published.
 
 Latched topics (``/tf_static``) and the robot descriptions are sent again to every
 client that subscribes, whenever it comes (a client already subscribed receives them
-once more: harmless for static transforms and descriptions).
+once more: harmless for static transforms and descriptions). The latched topics are
+also repeated every :data:`LATCHED_REPEAT_S` of wall time while someone listens: an app
+subscribes to a topic once for all its panels, and a panel that mounts after that first
+delivery (Lichtblick's Raw Messages of ``/tf_static``, empty in 3 runs of 4) gets them
+within a second.
+
+The clock: Lichtblick and Foxglove stamp a live message with the server's latest time
+broadcast, not with its log time. The time is therefore sent before the messages of each
+new instant (and every :data:`TIME_PERIOD_S` when nothing else goes out): with the clock
+sent only every 0.1 s, ten joint states shared one stamp in the app.
 
 Arms coming and going: a watch on ``/bringup`` opens the channels of new topics and
 arms; a watch on each arm's ``/<arm>/status`` learns, through the bus's ``on_gone``,
@@ -35,6 +44,7 @@ from __future__ import annotations
 import functools
 import logging
 import queue
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -60,6 +70,8 @@ logger = logging.getLogger("armfleet")
 JSON = "json"
 #: Simulated time between two time broadcasts to the clients [s].
 TIME_PERIOD_S = 0.1
+#: Wall time between two repeats of the latched topics (``/tf_static``) [s].
+LATCHED_REPEAT_S = 1.0
 #: Topics of these types, and ``/tf``, are sent at the display rate, not every step.
 STREAMED_TYPES = (JointState, ControllerState, GripperState)
 
@@ -98,7 +110,8 @@ class TopicChannels:
         world: the world whose topics are served.
         context: the SDK context of the server (channels of other worlds stay apart).
         assets: the allowlist the arms' meshes are added to.
-        on_time: called with the simulated time [ns] about every :data:`TIME_PERIOD_S`.
+        on_time: called with the simulated time [ns] before the messages of each new
+            instant, and about every :data:`TIME_PERIOD_S` when nothing is sent.
         stream_period_s: simulated time between two instants of the streamed topics
             [s]; None: every step.
     """
@@ -123,6 +136,7 @@ class TopicChannels:
         self._watch: Subscription | None = None
         self._scene = SceneObjects(world, context)
         self._last_time_ns = -1
+        self._last_repeat_s = time.monotonic()
         self._skipped: dict[str, int] = {}
         self._closed = False
         #: Messages handed to the server so far (descriptions included).
@@ -237,8 +251,22 @@ class TopicChannels:
             self._scene.refresh()  # objects added or removed since
         now = stamp_ns(self._world.time)
         if now - self._last_time_ns >= stamp_ns(TIME_PERIOD_S):
-            self._last_time_ns = now
-            self._on_time(now)
+            self._tick(now)
+        self._repeat_latched()
+
+    def _repeat_latched(self) -> None:
+        """Send the latched topics' messages again every :data:`LATCHED_REPEAT_S`, while a
+        client listens: an app subscribes once per topic for all its panels, so a panel
+        mounted after the subscription (Raw Messages of ``/tf_static`` beside the 3D panel)
+        would otherwise never see them."""
+        wall = time.monotonic()
+        if wall - self._last_repeat_s < LATCHED_REPEAT_S:
+            return
+        self._last_repeat_s = wall
+        for entry in self._topics.values():
+            if entry.subscription is not None and entry.channel.has_sinks():
+                for message in self._world.bus.latched(entry.topic):
+                    self._deliver(entry, message)
 
     def _on_gone(self, topic: str, reason: str) -> None:
         self.refresh()
@@ -278,7 +306,9 @@ class TopicChannels:
         wanted = entry.channel.has_sinks()
         if isinstance(entry, _DescriptionChannel):
             if subscribed and wanted:
-                entry.channel.log(entry.message, log_time=stamp_ns(self._world.time))
+                now = stamp_ns(self._world.time)
+                self._tick(now)
+                entry.channel.log(entry.message, log_time=now)
                 self.sent += 1
             return
         if wanted and entry.subscription is None:  # the bus replays latched messages
@@ -305,5 +335,15 @@ class TopicChannels:
                 logger.warning("foxglove: cannot encode a message of %s: %s", entry.topic, exc)
             self._skipped[entry.topic] = skipped + 1
             return
-        channel.log(data, log_time=stamp_ns(self._world.time))
+        now = stamp_ns(self._world.time)
+        self._tick(now)
+        channel.log(data, log_time=now)
         self.sent += 1
+
+    def _tick(self, now: int) -> None:
+        """Send the clock ``now`` [ns] if it moved since last sent: before the messages of
+        a new instant, so that an app stamping each message with the server's latest time
+        (Lichtblick, Foxglove) stamps it with its own log time."""
+        if now > self._last_time_ns:
+            self._last_time_ns = now
+            self._on_time(now)

@@ -12,7 +12,9 @@ What goes in the file:
     * ``/tf_static`` as latched at the start, then as arms come;
     * per arm: its URDF (attachment ``<arm>.urdf``), an ``armfleet.arms.arm`` metadata
       record (model, pose, joints, spawn time), and ``/<arm>/robot_description``
-      (``std_msgs/msg/String``, mesh paths as ``file://`` URIs for Foxglove);
+      (``std_msgs/msg/String``, mesh paths as ``file://`` URIs, for this machine), and
+      ``/<arm>/robot_meshes`` (``foxglove.SceneUpdate``: the link visuals with their mesh
+      files inside, which any Foxglove draws: :mod:`armfleet.recording.robot_meshes`);
     * the launch spec, if given (attachment ``launch_spec.yaml``), and an
       ``armfleet.run`` metadata record (version, dt, start).
 
@@ -51,6 +53,7 @@ from armfleet.recording.arm_record import (
 from armfleet.recording.encode import MessageEncoder, StringEncoder, encoder_for, stamp_ns
 from armfleet.recording.errors import RecordingError
 from armfleet.recording.mcap_sink import CHUNK_BYTES, McapSink
+from armfleet.recording.robot_meshes import ROBOT_MESHES, robot_meshes_message, robot_meshes_topic
 from armfleet.recording.spec_snapshot import spec_text
 
 if TYPE_CHECKING:
@@ -136,6 +139,8 @@ class Recorder:
         self._channels: dict[str, _Channel | None] = {}
         self._arms: dict[str, Arm] = {}
         self._skipped: dict[str, int] = {}
+        #: The arms' meshes, written when the file is completed (see :meth:`_add_meshes`).
+        self._meshes: list[_PendingMeshes] = []
 
     # -- properties -------------------------------------------------------------------
     @property
@@ -173,7 +178,7 @@ class Recorder:
         sink = McapSink(self._path, f"armfleet {__version__}", self._chunk_bytes)
         self._sink = sink
         # A script that never stops its recorder still leaves a complete file.
-        self._finalizer = weakref.finalize(self, sink.close)
+        self._finalizer = weakref.finalize(self, _complete, sink, self._meshes)
         now = self._now_ns()
         sink.add_metadata(
             RUN_METADATA,
@@ -224,7 +229,7 @@ class Recorder:
             self._check_arms()
             self._open_advertised()
         finally:
-            sink.close()
+            _complete(sink, self._meshes)
             if self._finalizer is not None:
                 self._finalizer.detach()
         for topic, count in self._skipped.items():
@@ -325,9 +330,59 @@ class Recorder:
             channel = self._open(topic, str, StringEncoder())
         if isinstance(channel, _Channel):
             self._sink.write(channel.id, now, channel.encode(with_file_uris(urdf)))
+        self._add_meshes(arm.name, urdf, now)
+
+    def _add_meshes(self, arm: str, urdf: str, now: int) -> None:
+        """Open ``/<arm>/robot_meshes`` (the arm's visuals with their meshes inside, so
+        that the file draws the arm on any machine); its message, logged at ``now``, is
+        written when the file is completed: megabytes of meshes at the start would push
+        the first seconds of data out of a run cut short (which has none then)."""
+        topic = robot_meshes_topic(arm)
+        channel = self._channels.get(topic)
+        if channel is None and topic not in self._channels:
+            channel = self._open(topic, dict, _ROBOT_MESHES_ENCODER)
+        if isinstance(channel, _Channel):
+            self._meshes.append(_PendingMeshes(arm, channel.id, urdf, now))
 
 
 _UNSEEN: Any = object()
+
+
+@dataclass(frozen=True)
+class _PendingMeshes:
+    arm: str
+    channel: int
+    urdf: str
+    time_ns: int
+
+
+def _complete(sink: McapSink, meshes: list[_PendingMeshes]) -> None:
+    """Write the arms' meshes, then complete and close the file (idempotent)."""
+    if sink.closed:
+        return
+    try:
+        for pending in meshes:
+            try:
+                data = robot_meshes_message(pending.urdf, pending.time_ns)
+            except (OSError, ValueError) as exc:
+                logger.warning("recording: cannot embed the meshes of %s: %s", pending.arm, exc)
+                continue
+            sink.write(pending.channel, pending.time_ns, data)
+        meshes.clear()
+    finally:
+        sink.close()
+
+
+class _RobotMeshesEncoder:
+    """The schema of ``/<arm>/robot_meshes`` (its messages are made whole, not encoded)."""
+
+    schema = ROBOT_MESHES
+
+    def __call__(self, message: Any) -> bytes:
+        raise TypeError("robot meshes are written by the recorder itself")
+
+
+_ROBOT_MESHES_ENCODER = _RobotMeshesEncoder()
 
 
 def _is_pattern(topic: str) -> bool:
