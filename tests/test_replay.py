@@ -20,7 +20,7 @@ from armfleet.cli.main import main
 from armfleet.description import ModelLibrary
 from armfleet.messages import JointState
 from armfleet.recording import ReplayPlayer, open_recording, replay_events
-from armfleet.recording.replay import ReplayClock
+from armfleet.recording.replay import STILL_TOLERANCE, ReplayClock
 from armfleet.recording.replay_arm import ReplayArm, usable_urdf
 from armfleet.recording.replay_stream import ArmAppeared, JointPositions, TargetSent
 from tests.conftest import RecordedRun
@@ -39,6 +39,10 @@ class FakeViewer:
         self.added: list[tuple[float, str]] = []
         self.ticks: list[tuple[float, dict[str, np.ndarray]]] = []
         self.clock: Any = None
+        self.expected: list[dict[str, Any]] = []
+
+    def expect_arms(self, positions: Any) -> None:
+        self.expected.append(dict(positions))
 
     def add_arm(self, arm: Any) -> None:
         self.shown[arm.name] = arm
@@ -165,7 +169,7 @@ def test_html_export_holds_the_recorded_motion(
 def test_live_replay_from_the_command_line(
     recorded_run: RecordedRun, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["replay", str(recorded_run.path), "--speed", "20", "--exit-at-end"])
+    code = main(["replay", str(recorded_run.path), "--speed", "20", "--exit-at-end", "--no-wait"])
     out = capsys.readouterr().out.splitlines()
     assert code == 0
     assert re.fullmatch(r"viewer: http://127\.0\.0\.1:\d+/static/", out[0])
@@ -221,3 +225,48 @@ def test_replay_needs_joint_states(tmp_path: Path) -> None:
         armfleet.record(world, path, topics=["/tf_static"]).stop()
     with pytest.raises(armfleet.RecordingError, match="no /<arm>/joint_states messages"):
         ReplayPlayer(open_recording(path), FakeViewer())
+
+
+def test_the_opening_is_shown_before_the_clock_starts(recorded_run: RecordedRun) -> None:
+    """``on_opened`` is called once both arms came up standing still, before bob's target;
+    the clock then starts there: at 1000x, paced, the rest takes recording / 1000."""
+    recording = open_recording(recorded_run.path)
+    viewer = FakeViewer()
+    player = ReplayPlayer(recording, viewer)
+    opened: list[tuple[float, list[str], int]] = []
+
+    def on_opened() -> None:
+        opened.append((player.clock.time, sorted(viewer.shown), len(viewer.ticks)))
+
+    duration = player.play(speed=1000.0, on_opened=on_opened)
+    assert duration == pytest.approx(recording.duration_s)
+    [(time_s, shown, ticks)] = opened
+    assert shown == ["bob", "toby"]
+    # Before bob's target (the first thing that is not arms coming up), after toby's arrival.
+    command_s = min(t for topic, t, _ in recorded_run.messages if topic.endswith("/commands"))
+    toby_s = recorded_states(recorded_run, "toby")[0][0] / 1e9
+    assert toby_s <= time_s < command_s / 1e9
+    assert 0 < ticks < len(viewer.ticks)
+    # Both arms were framed before they came, at their spawn positions, then no more.
+    assert viewer.expected == [{"bob": (0.0, 0.0, 0.0), "toby": (1.0, 0.0, 0.0)}, {}]
+
+
+def test_played_again_the_arms_stay_and_start_over(recorded_run: RecordedRun) -> None:
+    """As ``--loop`` plays it: the second play keeps both arms (no second load), puts bob
+    back at his first recorded state before the clock starts, and ends where he ended."""
+    recording = open_recording(recorded_run.path)
+    viewer = FakeViewer()
+    player = ReplayPlayer(recording, viewer)
+    player.play(speed=None, on_opened=lambda: None)
+    states = recorded_states(recorded_run, "bob")
+    at_opening: list[np.ndarray] = []
+    duration = player.play(
+        speed=None, on_opened=lambda: at_opening.append(player.arms["bob"].body.position.copy())
+    )
+    assert duration == pytest.approx(recording.duration_s)
+    assert [name for _, name in viewer.added] == ["bob", "toby"]
+    assert sorted(viewer.shown) == ["bob", "toby"]
+    [position] = at_opening  # standing still: within the opening's tolerance of his start
+    assert np.abs(position - states[0][1].position).max() <= STILL_TOLERANCE
+    assert np.abs(position - states[-1][1].position).max() > 0.1
+    assert viewer.ticks[-1][1]["bob"].tolist() == states[-1][1].position.tolist()

@@ -269,6 +269,36 @@ def test_an_arm_appears_when_ready_and_goes_when_removed(viewed: armfleet.World)
     assert viewer.arms == ("bob", "toby")
 
 
+def test_an_arm_is_framed_and_announced_before_its_meshes(viewed: armfleet.World) -> None:
+    """The camera turns to a new arm and the loading line names it before its first mesh is
+    sent; the line goes after its last mesh. Checked on the messages a page gets."""
+    viewer = viewer_of(viewed)
+    node = "/meshcat/armfleet/tia/visuals/"
+    with SceneWatcher(viewer.port) as watcher:
+        watcher.wait_quiet()
+        start = len(watcher.state.log)
+        viewed.spawn("tia", at=(0, 1.6))
+        try:
+            watcher.wait_for(lambda s: s.loading_lines[-1][1] == "")
+            state = watcher.wait_quiet()
+            meshes = [
+                i for i, (kind, path) in enumerate(state.log)
+                if kind == "set_object" and path.startswith(node)
+            ]  # fmt: skip
+            assert len(meshes) == 11
+            # The stage's shift puts the framed box's middle at the page's origin: before
+            # the first mesh it already holds tia's base (y = 1.6) in the framed box.
+            shift = [m for i, m in state.shifts if start <= i < meshes[0]]
+            assert shift and -shift[-1][1, 3] > 0.5, "reframed for tia before her meshes"
+            lines = [(i, text) for i, text in state.loading_lines if i >= start]
+            assert lines[0][0] < meshes[0]
+            assert lines[0][1] == "loading the meshes of tia (arm 3 of 3)…"
+            assert lines[-1] == (lines[-1][0], "") and lines[-1][0] > meshes[-1]
+            assert viewer.loading_line == ""
+        finally:
+            viewed.remove("tia")
+
+
 # -- replay ----------------------------------------------------------------------------
 def replay_commands(path: Path) -> list[dict[str, Any]]:
     """The MeshCat commands a replay file runs, decoded."""
@@ -480,3 +510,20 @@ def test_objects_are_drawn_follow_the_physics_and_go_when_removed(tmp_path: Path
     quaternion = tracks[".quaternion"]["keys"][-1]["value"]
     rotation = pin.Quaternion(np.array(quaternion)).toRotationMatrix()
     assert np.abs(rotation[:, 1] - (0, 0, 1)).max() < 1e-3, "the can still stands in the replay"
+
+
+@pytest.mark.parametrize(
+    "positions, expected",
+    [
+        ({"bob": (0.0, float("nan"), 0.0)}, r"expected arm 'bob': give its base as three finite"),
+        ({"bob": (0.0, 1.0)}, r"expected arm 'bob': give its base as three finite"),
+        ([(0.0, 0.0, 0.0)], r"expected arms: give a mapping of arm name to base"),
+    ],
+)
+def test_expected_arms_take_names_and_positions_only(
+    viewed: armfleet.World, positions: Any, expected: str
+) -> None:
+    viewer = viewer_of(viewed)
+    with pytest.raises(ViewerError, match=expected):
+        viewer.expect_arms(positions)
+    assert viewer.loading_line == "" and viewer.error is None

@@ -7,7 +7,6 @@ CI a missing browser fails. Screenshots go to ``test-artifacts/``.
 from __future__ import annotations
 
 import io
-import os
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -20,10 +19,9 @@ from PIL import Image
 
 import armfleet
 from armfleet.messages import PlannedMotion
-from armfleet.viewer.headless_chromium import CHROMIUM, CHROMIUM_FLAGS
 from armfleet.viewer.plan_lines import PLAN_COLOR
 from armfleet.viewer.scene import BACKGROUND_TOP
-from tests.viewer_helpers import bob_and_toby_viewed, expected_visual_poses
+from tests.viewer_helpers import bob_and_toby_viewed, expected_visual_poses, headless_browser
 
 VIEWPORT_WIDTH, VIEWPORT_HEIGHT = 960, 600
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
@@ -147,27 +145,11 @@ OBJECTS_LOADED_JS = f"""
 """
 
 
-def ci_requires_browser() -> bool:
-    return os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
-
-
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
     """Debian's Chromium, headless, launched by Playwright (never a downloaded browser)."""
-    if not CHROMIUM.exists():
-        if ci_requires_browser():
-            pytest.fail(f"{CHROMIUM} is missing; the test command installs Debian's chromium")
-        pytest.skip(f"{CHROMIUM} is missing (apt-get install chromium); CI does not skip this")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright:
-        launched = playwright.chromium.launch(
-            executable_path=str(CHROMIUM), headless=True, args=CHROMIUM_FLAGS
-        )
-        try:
-            yield launched
-        finally:
-            launched.close()
+    with headless_browser() as launched:
+        yield launched
 
 
 @pytest.fixture(scope="module")

@@ -26,6 +26,37 @@ from armfleet.messages import PlannedMotion
 Matrix = np.ndarray
 
 
+def ci_requires_browser() -> bool:
+    return os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
+
+
+@contextlib.contextmanager
+def headless_browser() -> Iterator[Any]:
+    """Debian's Chromium, headless, launched by Playwright (never a downloaded browser).
+
+    Skips the test when /usr/bin/chromium is missing on a developer machine; under CI a
+    missing browser fails.
+    """
+    import pytest
+
+    from armfleet.viewer.headless_chromium import CHROMIUM, CHROMIUM_FLAGS
+
+    if not CHROMIUM.exists():
+        if ci_requires_browser():
+            pytest.fail(f"{CHROMIUM} is missing; the test command installs Debian's chromium")
+        pytest.skip(f"{CHROMIUM} is missing (apt-get install chromium); CI does not skip this")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        launched = playwright.chromium.launch(
+            executable_path=str(CHROMIUM), headless=True, args=list(CHROMIUM_FLAGS)
+        )
+        try:
+            yield launched
+        finally:
+            launched.close()
+
+
 @contextlib.contextmanager
 def bob_and_toby_viewed() -> Iterator[armfleet.World]:
     """A world with a viewer, bob at (0, 0) and toby at (1, 0); closed on exit."""
@@ -129,10 +160,19 @@ class SceneState:
     properties: dict[tuple[str, str], Any] = field(default_factory=dict)
     #: Every command received, in order, as (type, path).
     log: list[tuple[str, str]] = field(default_factory=list)
+    #: The page's loading lines received, as (index in the log, text).
+    loading_lines: list[tuple[int, str]] = field(default_factory=list)
+    #: The transforms of ``/meshcat`` (the stage's shift) received, as (index in the log, matrix).
+    shifts: list[tuple[int, Matrix]] = field(default_factory=list)
 
     def apply(self, command: dict[str, Any]) -> None:
         kind, path = command["type"], command.get("path", "")
         self.log.append((kind, path))
+        if kind == "armfleet_status":
+            self.loading_lines.append((len(self.log) - 1, command["text"]))
+        elif kind == "set_transform" and path == "/meshcat":
+            matrix = np.array(command["matrix"], dtype=float).reshape(4, 4).T
+            self.shifts.append((len(self.log) - 1, matrix))
         if kind == "set_object":
             self.objects[path] = command
         elif kind == "set_transform":

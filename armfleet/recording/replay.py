@@ -8,6 +8,11 @@ export: as fast as possible, then :meth:`Viewer.save`).
 The viewer takes arms and ticks as a world gives them (``add_arm(arm)``,
 ``tick(world)`` reading ``world.time``); :class:`ReplayClock` and
 :class:`ReplayArm` provide just what it reads.
+
+A live replay can hold its start until someone watches (``armfleet replay`` waits for a
+browser): the recording's *opening*, its arms coming up and standing still, is shown at
+once, then ``on_opened`` is called (it waits), and only then does the clock start. A
+15.8 s recording played at 2x had ended before its page was open (issue 28).
 """
 
 from __future__ import annotations
@@ -15,9 +20,11 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, cast
+
+import numpy as np
 
 from armfleet import topics
 from armfleet.checks.user_paths import given_path
@@ -49,10 +56,18 @@ logger = logging.getLogger("armfleet")
 REPLAY_RATE_HZ = 60.0
 #: Longest sleep between two checks of the wall clock while paced [s].
 MAX_SLEEP_S = 0.1
+#: The longest an opening lasts, in replay time [s]: arms standing still after it are
+#: replayed at their pace.
+OPENING_MAX_S = 1.0
+#: Joint motion an opening takes for standing still (an arm settling as it comes up)
+#: [rad or m]; the viewer does not redraw below 1e-5.
+STILL_TOLERANCE = 1e-4
 
 
 class ReplayTarget(Protocol):
     """What a replay drives: the parts of :class:`armfleet.viewer.Viewer` it uses."""
+
+    def expect_arms(self, positions: Mapping[str, Sequence[float]]) -> None: ...
 
     def add_arm(self, arm: Arm) -> None: ...
 
@@ -104,45 +119,109 @@ class ReplayPlayer:
         self._waiting: dict[str, ReplayArm] = {}  # appeared, shown at their first joint state
         #: Arms that could not be rebuilt here, and why.
         self.skipped: dict[str, str] = {}
+        # Arms still shown from the previous play; kept if the opening brings them again.
+        self._left_over: set[str] = set()
+        self._placed: set[str] = set()  # arms given a joint state in this play
 
     def play(
         self,
         speed: float | None = 1.0,
         on_event: Callable[[float], None] | None = None,
+        on_opened: Callable[[], None] | None = None,
     ) -> float:
         """Play to the end; returns the replayed duration [s].
 
         Args:
             speed: times real time (1.0: as recorded); None for as fast as possible.
             on_event: called with the replay time [s] after each event is shown.
+            on_opened: called once the opening is shown: the arms of the recording's
+                first :data:`OPENING_MAX_S` that come up and stand still until then,
+                shown at once, unpaced. The clock starts when it returns (e.g. once a
+                browser shows the arms). None: no opening, every event paced.
         """
         if speed is not None and not speed > 0:
             raise RecordingError(f"replay speed {speed} is invalid; give a factor > 0")
         start_ns = self._recording.start_ns or 0
         wall_start = time.monotonic()
         world = cast("World", self.clock)
+        opening = on_opened is not None
+        self.clock.time = 0.0
+        self._placed.clear()
+        self._left_over = set(self.arms)
+        if not opening:  # played again from the start: no arm is up yet
+            self._drop_left_over()
+        if opening:  # framed in the viewer before any of their meshes is sent
+            self._target.expect_arms(self._opening_arms())
         for event in replay_events(self._recording, self._rate_hz):
             replay_time = max(0.0, (event.time_ns - start_ns) / 1e9)
-            if speed is not None:
+            if opening and not self._opens(event, replay_time):
+                opening = False
+                self._opened(on_opened)
+                wall_start = time.monotonic() - self.clock.time / (speed or 1.0)
+            if speed is not None and not opening:
                 _sleep_until(wall_start + replay_time / speed)
             self._apply(event, replay_time)
             self.clock.time = replay_time
             self._target.tick(world)
             if on_event is not None:
                 on_event(replay_time)
+        if opening:  # the whole recording was its opening
+            self._opened(on_opened)
         return self.clock.time
+
+    def _opening_arms(self) -> dict[str, tuple[float, float, float]]:
+        """Where the arms that may come up in the opening stand (base x, y, z) [m]."""
+        last_ns = (self._recording.start_ns or 0) + round(OPENING_MAX_S * 1e9)
+        return {
+            arm.name: (arm.pose.x, arm.pose.y, arm.pose.z)
+            for arm in self._recording.arms
+            if arm.spawned_ns <= last_ns and arm.name not in self.skipped
+        }
+
+    def _opened(self, on_opened: Callable[[], None] | None) -> None:
+        """The opening is shown: await no other arm, then let ``on_opened`` wait."""
+        self._drop_left_over()  # shown last time, they come later in the recording
+        self._target.expect_arms({})  # those that did not come yet come later, paced
+        if on_opened is not None:
+            on_opened()
+
+    def _opens(self, event: Any, replay_time: float) -> bool:
+        """Whether ``event`` belongs to the opening: arms coming up and standing still."""
+        if replay_time > OPENING_MAX_S:
+            return False
+        if isinstance(event, ArmAppeared):
+            return True
+        if isinstance(event, MotionChanged):
+            return not event.moving
+        if isinstance(event, JointPositions):
+            arm = self.arms.get(event.arm)
+            if arm is None or event.arm not in self._placed:  # its first state: it is shown
+                return True
+            before = arm.body.position.copy()
+            arm.set_positions(event.names, event.positions)
+            moved = np.abs(arm.body.position - before)
+            still = not bool(np.any(moved > STILL_TOLERANCE))  # NaN: unknown, not a move
+            arm.body.position[:] = before
+            return still
+        return False  # a target, a plan, a removal: the run has begun
 
     def _apply(self, event: Any, replay_time: float) -> None:
         if isinstance(event, JointPositions):
             arm = self.arms.get(event.arm) or self._waiting.pop(event.arm, None)
             if arm is None:
                 return
+            self._placed.add(event.arm)
             arm.set_positions(event.names, event.positions)
             if event.arm not in self.arms:
                 self.arms[event.arm] = arm
                 self._target.add_arm(cast("Arm", arm))
         elif isinstance(event, ArmAppeared):
-            self._remove(event.arm.name)
+            name = event.arm.name
+            if name in self._left_over and self.arms[name].record == event.arm:
+                self._left_over.discard(name)  # played again: the same arm, already shown
+                return
+            self._left_over.discard(name)
+            self._remove(name)
             try:
                 arm = ReplayArm(event.arm, self._bus, self._models)
             except ArmfleetError as exc:  # show the others
@@ -164,6 +243,11 @@ class ReplayPlayer:
             arm = self.arms.get(event.arm)
             if arm is not None:
                 arm.is_moving = event.moving
+
+    def _drop_left_over(self) -> None:
+        for name in self._left_over:
+            self._remove(name)
+        self._left_over.clear()
 
     def _remove(self, name: str) -> None:
         self._waiting.pop(name, None)

@@ -156,19 +156,38 @@ class ArmVisual:
     # -- scene --------------------------------------------------------------------------
     def bounds(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(min, max) corners [m] of the arm's frame origins at its current pose."""
-        self._pin.framesForwardKinematics(self.model, self._data, self.arm.body.position)
-        prefix = self.arm.description.prefix
-        origins = np.array(
-            [
-                placement.translation
-                for frame, placement in zip(self.model.frames, self._data.oMf, strict=True)
-                if frame.name.startswith(prefix)
-            ]
-        )
-        return origins.min(axis=0), origins.max(axis=0)
+        return arm_bounds(self.arm, self._data)
 
     def close(self) -> None:
         """Stop following the arm's commands."""
         if self._subscription is not None:
             self._subscription.cancel()
             self._subscription = None
+
+
+def arm_bounds(
+    arm: Arm, data: Any = None
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """(min, max) corners [m] of ``arm``'s frame origins at its current pose.
+
+    Needs only the arm's kinematics, not its meshes: the viewer frames an arm with it
+    before the meshes are sent.
+
+    Args:
+        arm: a ready arm (or a replay's look-alike).
+        data: Pinocchio data of the arm's model to compute in; a new one if None.
+    """
+    import pinocchio as pin
+
+    model = arm.kinematics.model
+    data = model.createData() if data is None else data
+    pin.framesForwardKinematics(model, data, arm.body.position)
+    prefix = arm.description.prefix
+    origins = np.array(
+        [
+            placement.translation
+            for frame, placement in zip(model.frames, data.oMf, strict=True)
+            if frame.name.startswith(prefix)
+        ]
+    )
+    return origins.min(axis=0), origins.max(axis=0)

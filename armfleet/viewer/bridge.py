@@ -22,6 +22,13 @@ ZMQ protocol (a REP socket; every request gets one reply):
   fewer frames, and nothing waits for it.
 - ``[b"scene"]``: reply ``[b"scene", command, ...]``, the commands that rebuild
   the current scene, in order.
+- ``[b"status", text]``: the loading line the page shows over the scene (UTF-8; empty:
+  none). A page gets it after every command sent before it, so it goes when what it
+  announces is in the page: a page that opens later gets the scene, then the line.
+  Reply ``ok``.
+- ``[b"browsers"]``: reply ``[b"browsers", connected, shown]``, two decimal counts: the
+  pages connected, and those among them that reported the scene shown (a page answers
+  :data:`SHOWN_MESSAGE` and the line's serial once it handled an empty loading line).
 - ``[b"ping"]``: reply ``ok``.
 """
 
@@ -60,6 +67,10 @@ OWN_PAGE_FOLDER = Path(__file__).with_name("static")
 
 #: Field of a mesh-file object naming its mesh; the page parses each named mesh once.
 MESH_TAG = "armfleet_mesh"
+#: Command type of the loading line (armfleet's page handles it; MeshCat never sees it).
+STATUS_COMMAND = "armfleet_status"
+#: What a page sends, with the line's serial, once it handled an empty loading line.
+SHOWN_MESSAGE = "armfleet:shown:"
 
 NodePath = tuple[str, ...]
 
@@ -119,6 +130,12 @@ def share_mesh(data: bytes) -> SharedMesh | None:
 
 #: What a node holds and a browser is sent.
 Message = bytes | SharedMesh
+
+
+def status_command(text: str, serial: int) -> bytes:
+    """The page's command showing ``text`` as its loading line (empty: hide it)."""
+    packed: bytes = umsgpack.packb({"type": STATUS_COMMAND, "text": text, "serial": serial})
+    return packed
 
 
 def split_path(path: bytes) -> NodePath:
@@ -195,19 +212,24 @@ class BrowserSocket(tornado.websocket.WebSocketHandler):
         self._pending: Any = None  # the Future of the last write
         self._stale: set[NodePath] = set()
         self._meshes: set[str] = set()  # digests of the meshes this page has
+        #: The page reported the scene shown (and no loading line came since).
+        self.shown = False
 
     def prepare(self) -> None:
         check_host(self)
 
     def open(self, *args: str, **kwargs: str) -> None:
         self.bridge.browsers.add(self)
-        self.write_all(list(self.bridge.tree.commands()))
+        self.write_all([*self.bridge.tree.commands(), self.bridge.status])
 
     def on_close(self) -> None:
         self.bridge.browsers.discard(self)
 
     def on_message(self, message: str | bytes) -> None:
-        """Browsers only send image captures, which armfleet does not use."""
+        """The page's report that it shows the scene; image captures are ignored."""
+        # A report on an earlier line is stale: a new line came since.
+        if message == f"{SHOWN_MESSAGE}{self.bridge.status_serial}":
+            self.shown = True
 
     @property
     def busy(self) -> bool:
@@ -271,6 +293,9 @@ class Bridge:
     def __init__(self, web_port: int, parent_pid: int | None) -> None:
         self.tree = SceneNode()
         self.browsers: set[BrowserSocket] = set()
+        #: The loading line's command, as pages get it, and its serial.
+        self.status_serial = 0
+        self.status: bytes = status_command("", self.status_serial)
         self._live_nodes: dict[bytes, tuple[NodePath, SceneNode]] = {}
         self._parent_pid = parent_pid
         sockets = tornado.netutil.bind_sockets(web_port, address=LOOPBACK, family=socket.AF_INET)
@@ -321,12 +346,26 @@ class Bridge:
             return [b"scene", *(c.full if isinstance(c, SharedMesh) else c for c in commands)]
         if kind == b"ping":
             return [b"ok"]
+        if kind == b"status" and len(frames) == 2:
+            self._on_status(frames[1].decode("utf-8"))
+            return [b"ok"]
+        if kind == b"browsers":
+            shown = sum(browser.shown for browser in self.browsers)
+            return [b"browsers", str(len(self.browsers)).encode(), str(shown).encode()]
         if kind in COMMANDS and len(frames) == 3:
             message = self._apply(kind, split_path(frames[1]), frames[2])
             for browser in list(self.browsers):
                 browser.write_all([message])
             return [b"ok"]
         return [b"error: unknown request " + kind[:40]]
+
+    def _on_status(self, text: str) -> None:
+        self.status_serial += 1
+        self.status = status_command(text, self.status_serial)
+        for browser in list(self.browsers):
+            if text:
+                browser.shown = False
+            browser.write_all([self.status])
 
     def _on_batch(self, frames: list[bytes]) -> None:
         if len(frames) != 2:

@@ -11,6 +11,10 @@ viewer that fails (its server died or hangs) stops itself; the simulation goes
 on and :attr:`Viewer.error` says why. While an arm runs a planned motion, its tool
 path is drawn under the arm's node (:mod:`armfleet.viewer.plan_lines`).
 
+The camera frames the arms before their meshes are sent: the arms a launch announces
+(:meth:`Viewer.expect_arms`) from the first frame, any other arm as it comes; the page
+shows a loading line until the meshes are all in it (:mod:`armfleet.viewer.arrivals`).
+
 Only the standard library and numpy are imported with this module: MeshCat,
 Pinocchio's visualizer, ZMQ and tornado load when a viewer starts.
 """
@@ -22,8 +26,9 @@ import math
 import threading
 import time
 import warnings
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from armfleet.checks.flags import flag
 from armfleet.viewer.errors import ViewerError
@@ -33,6 +38,7 @@ if TYPE_CHECKING:
     from armfleet.messages import PlannedMotion
     from armfleet.objects import WorldObject
     from armfleet.viewer.arm_visual import ArmVisual
+    from armfleet.viewer.arrivals import Arrivals
     from armfleet.viewer.commands import Updates
     from armfleet.viewer.connection import BridgeConnection
     from armfleet.viewer.idle_refresher import IdleRefresher
@@ -54,6 +60,18 @@ PAUSE_S = 0.1
 STALL_TIMEOUT_S = 5.0
 #: Time a save may wait for the server's scene [s].
 SCENE_TIMEOUT_S = 60.0
+
+
+class BrowserCount(NamedTuple):
+    """The pages open on a viewer.
+
+    Attributes:
+        connected: pages connected to the server.
+        shown: pages among them that reported every mesh sent so far shown.
+    """
+
+    connected: int
+    shown: int
 
 
 def start_viewer(
@@ -114,6 +132,7 @@ class Viewer:
             warnings.simplefilter("ignore", DeprecationWarning)
             import meshcat
 
+        from armfleet.viewer.arrivals import Arrivals
         from armfleet.viewer.idle_refresher import IdleRefresher
         from armfleet.viewer.live_link import LiveLink
         from armfleet.viewer.plan_lines import PlanLines
@@ -130,6 +149,8 @@ class Viewer:
         self._visuals: dict[str, ArmVisual] = {}
         self._objects: dict[str, ObjectVisual] = {}
         self._recorder: Recorder = Recorder()
+        self._arrivals: Arrivals = Arrivals()
+        self._loading_line = ""
         self._meshes: Any = _cached_mesh_loader()
         self._lock = threading.RLock()
         self._period_s = 1.0 / display_rate_hz
@@ -205,40 +226,96 @@ class Viewer:
     def closed(self) -> bool:
         return self._closed
 
+    @property
+    def browsers(self) -> BrowserCount:
+        """The pages open now, and those that show every mesh sent so far.
+
+        Raises:
+            ViewerError: the viewer is not running, or its server does not answer.
+        """
+        if not self._live or self._connection is None:
+            raise ViewerError(f"the viewer is not running ({self._error or 'closed'})")
+        with self._lock:  # one thread at a time on the connection
+            reply = self._connection.request([b"browsers"])
+        try:
+            return BrowserCount(int(reply[1]), int(reply[2]))
+        except (IndexError, ValueError):
+            raise ViewerError(f"viewer server: unexpected answer {reply!r}") from None
+
+    @property
+    def loading_line(self) -> str:
+        """The page's loading line now; empty once no awaited arm is missing."""
+        return self._loading_line
+
     # -- arms ---------------------------------------------------------------------------
+    def expect_arms(self, positions: Mapping[str, Sequence[float]]) -> None:
+        """Frame the arms that are about to come, before any of their meshes is sent.
+
+        The page then shows them all from its first frame, and a loading line until
+        each of them is shown. Arms already shown keep their place in the framing.
+
+        Args:
+            positions: arm name -> where its base will stand (x, y, z) [m]; replaces
+                the arms expected before.
+
+        Raises:
+            ViewerError: ``positions`` is not names with three finite numbers each.
+        """
+        with self._lock:
+            self._arrivals.await_arms(positions)
+            if not self._live:
+                return
+            try:
+                self._frame_camera()
+                self._show_loading()
+            except ViewerError as exc:
+                self._fail(str(exc))
+
     def add_arm(self, arm: Arm) -> None:
         """Load ``arm``'s meshes under ``/meshcat/armfleet/<name>`` and follow it.
 
+        The camera frames the arm where it stands before its meshes are sent, and
+        the page's loading line names it while they are on their way.
         Never raises for viewer trouble: the arm is then simply not shown.
         """
         if not self._live:
             return
-        from armfleet.viewer.arm_visual import ArmVisual
+        from armfleet.viewer.arm_visual import ArmVisual, arm_bounds
 
         try:
             with self._lock:
-                visual = ArmVisual(
-                    arm, self._visualizer, self._show_frames, self._show_targets, self._meshes
-                )
+                try:
+                    self._arrivals.arriving(arm.name, arm_bounds(arm))
+                    self._frame_camera()
+                    self._show_loading()
+                    visual = ArmVisual(
+                        arm, self._visualizer, self._show_frames, self._show_targets, self._meshes
+                    )
+                finally:
+                    self._arrivals.arrived(arm.name)
                 self._visuals[arm.name] = visual
                 self._recorder.add(arm.name)
                 if self._plans is not None:
                     self._plans.follow(arm)  # its planned motions, drawn while they run
                 self._frame_camera()
                 self._send_poses()  # at once: the simulation may not step again
+                self._show_loading()  # after the meshes: the page has them when it goes
         except ViewerError as exc:
             self._fail(str(exc))
         except (RuntimeError, ValueError, OSError) as exc:  # Pinocchio/MeshCat loading
             logger.warning("viewer: cannot show %s: %s", arm.name, exc)
+            self._update_loading()
 
     def remove_arm(self, name: str) -> None:
         """Remove arm ``name`` from the scene (and from the replay)."""
         with self._lock:
             visual = self._visuals.pop(name, None)
             self._recorder.remove(name)
+            self._arrivals.arrived(name)  # awaited no more
             if self._plans is not None:
                 self._plans.forget(name)  # its line goes with its node, below
             if visual is None:
+                self._update_loading()
                 return
             visual.close()
             if not self._live or self._link is None:
@@ -414,7 +491,26 @@ class Viewer:
     # -- scene --------------------------------------------------------------------------
     def _frame_camera(self) -> None:
         bounds = [visual.bounds() for visual in self._visuals.values()]
+        bounds += self._arrivals.boxes(self._visuals)
         self._stage.frame(bounds + [thing.bounds() for thing in self._objects.values()])
+
+    def _show_loading(self) -> None:
+        """Send the page's loading line if it changed (caller holds the lock)."""
+        line = self._arrivals.line(self._visuals)
+        if line != self._loading_line and self._connection is not None:
+            self._connection.request([b"status", line.encode("utf-8")])
+            self._loading_line = line
+
+    def _update_loading(self) -> None:
+        """Reframe and update the loading line after an awaited arm failed or went."""
+        if not self._live:
+            return
+        with self._lock:
+            try:
+                self._frame_camera()
+                self._show_loading()
+            except ViewerError as exc:
+                self._fail(str(exc))
 
     def save(self, path: str | Path) -> Path:
         """Write a standalone HTML replay of the run so far (plays from ``file://``).

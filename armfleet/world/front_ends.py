@@ -9,7 +9,7 @@ no front end, and another package can add its own.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any, Protocol
@@ -92,6 +92,9 @@ class ViewerHandle(Protocol):
     def planned_motions(self) -> dict[str, PlannedMotion]:
         """The planned motion it shows per arm."""
         ...
+
+    def expect_arms(self, positions: Mapping[str, Sequence[float]]) -> None:
+        """Frame the arms about to come (name -> base x, y, z [m]) before their meshes."""
 
     def show_frames(self, visible: bool = True) -> None:
         """Show or hide the TF frames."""

@@ -93,6 +93,8 @@ def launch(
         viewer_port=viewer_port,
     )
     try:
+        if world.viewer is not None:  # framed before any mesh comes, from the first frame
+            world.viewer.expect_arms({a.name: (a.pose.x, a.pose.y, a.pose.z) for a in spec.arms})
         if before_spawn is not None:
             before_spawn(world)
         for arm in spec.arms:
