@@ -4,7 +4,7 @@
 >>> world = armfleet.World()
 >>> bob = world.spawn("bob", model="panda", at=(0, 0))
 
-The public API. Importing it loads PyBullet, the errors and the messages; every other name
+The public API. Importing it loads the errors and the messages; every other name
 loads its room on first use (``armfleet.World``: the simulator; ``armfleet.connect``: the
 live API's client; ``armfleet.sweep``: Ray), and the optional extras (Ray, pyarrow,
 Foxglove, Gymnasium, PettingZoo, matplotlib) only in the features that need them.
@@ -13,9 +13,9 @@ docs/design.md shows the package's rooms.
 
 from typing import TYPE_CHECKING
 
-from armfleet.physics.quiet_pybullet import import_quietly
+from armfleet.physics.quiet_import_hook import install as _install_quiet_pybullet
 
-import_quietly()
+_install_quiet_pybullet()  # PyBullet loads, without its banner, where it is first imported
 
 from armfleet._version import __version__
 from armfleet.errors import (

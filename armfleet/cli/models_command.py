@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
 
 from armfleet.cli.parser import OneLineParser
-from armfleet.description import ModelLibrary
 from armfleet.errors import ArmfleetError
-from armfleet.kinematics import ArmKinematics
+
+if TYPE_CHECKING:  # types only; the model library and Pinocchio load in run()
+    from armfleet.description import ModelLibrary
 
 
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -26,6 +28,8 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
 def run(args: argparse.Namespace) -> int:
     """Print one line per model; a model of one's own that cannot be read is one line on
     stderr, and the exit code is then 2."""
+    from armfleet.description import ModelLibrary
+
     library = ModelLibrary()
     shipped, own = library.names, library.own_models
     width = max((len(name) for name in (*shipped, *own.names)), default=5) + 1
@@ -49,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _degrees_of_freedom(library: ModelLibrary, model: str) -> str:
     """E.g. ``  9  7 arm + 2 other (fingers)``."""
+    from armfleet.kinematics import ArmKinematics
+
     description = library.expand(model, "")
     kinematics = ArmKinematics(description.urdf, description.tool0)
     arm, other = len(kinematics.arm_indices), len(kinematics.auxiliary_indices)

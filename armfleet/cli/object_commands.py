@@ -7,9 +7,19 @@ import argparse
 from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.parser import OneLineParser
-from armfleet.objects.object_spec import DEFAULT_MASS_KG, MAX_MASS_KG, MAX_SIZE_M, SIZE_MEANING
+from armfleet.objects.object_spec import (
+    DEFAULT_MASS_KG,
+    MAX_MASS_KG,
+    MAX_SIZE_M,
+    SIZE_MEANING,
+    Shape,
+)
 from armfleet.remote.world_info import ObjectInfo
-from armfleet.services.object_services import REMOTE_SHAPES
+
+#: Shapes a client may add: armfleet.services.object_services.REMOTE_SHAPES, derived here
+#: by the same rule so that these commands start without the planner that module loads
+#: (tests/test_cli_startup.py checks the two agree).
+REMOTE_SHAPES = tuple(s.value for s in Shape if s is not Shape.MESH)
 
 
 def add_parsers(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:

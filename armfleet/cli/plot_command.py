@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 
 from armfleet.checks.names import ARM_NAME_PATTERN
 from armfleet.cli.misplaced_values import ValueTest
 from armfleet.cli.parser import OneLineParser
 from armfleet.cli.path_arguments import path_text
-from armfleet.recording import open_recording, plot_recording
 
 
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -39,6 +39,11 @@ def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if sys.stderr.isatty():  # a sign of life: matplotlib and the reading take seconds
+        print(f"plotting {args.recording}...", file=sys.stderr, flush=True)
+    # The recording reader and matplotlib load only for this command.
+    from armfleet.recording import open_recording, plot_recording
+
     recording = open_recording(args.recording)
     paths = plot_recording(recording, args.arm, args.output)
     for arm, path in paths.items():

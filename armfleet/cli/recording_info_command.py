@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.path_arguments import path_text
-from armfleet.recording import Recording, open_recording
+
+if TYPE_CHECKING:  # the recording reader loads only to describe a recording
+    from armfleet.recording import Recording
 
 
 def extend_info_parser(parser: OneLineParser) -> None:
@@ -31,6 +34,8 @@ def extend_info_parser(parser: OneLineParser) -> None:
             return world_info(args)
         if args.connect is not None:
             raise UsageError("give a recording or --connect, not both")
+        from armfleet.recording import open_recording
+
         print(describe(open_recording(args.recording)))
         return 0
 

@@ -10,6 +10,9 @@ for a vector parameter (drawn element by element)::
 
 A distribution knows its support (the smallest and largest value it can give), so a
 sweep can refuse one that reaches outside its parameter's range before any run starts.
+It is also refused when it is written where NumPy's generator cannot draw from it, so
+that no worker meets the problem: a uniform whose ``high - low`` overflows, a normal
+whose draws could overflow to infinity, integer bounds outside int64.
 """
 
 from __future__ import annotations
@@ -17,7 +20,8 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -27,6 +31,14 @@ from armfleet.checks.real_numbers import is_real
 KINDS = ("uniform", "normal", "integers", "choice")
 
 Value = float | int | tuple[float, ...]
+
+#: The bounds of ``integers`` (NumPy's generator draws int64).
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+#: Largest magnitude a whole number keeps exactly as a float (a choice of larger whole
+#: numbers gives floats).
+EXACT_FLOAT_INTEGER = 2**53
+#: Standard deviations a normal's draw may reach before it would overflow to infinity.
+NORMAL_REACH_STD = 40.0
 
 
 class DistributionError(ValueError):
@@ -93,12 +105,21 @@ class Normal(Distribution):
 
 @dataclass(frozen=True)
 class Integers(Distribution):
+    """Whole numbers from ``low`` to ``high``, both included.
+
+    Attributes:
+        low, high: the bounds, as floats (for the support and the sweep's fingerprint).
+        exact_low, exact_high: the same bounds exactly, as int64 (what is drawn from).
+    """
+
     low: np.ndarray
     high: np.ndarray
     size: int
+    exact_low: np.ndarray = field(repr=False, compare=False)
+    exact_high: np.ndarray = field(repr=False, compare=False)
 
     def draw(self, rng: np.random.Generator) -> Value:
-        value = rng.integers(self.low.astype(np.int64), self.high.astype(np.int64), endpoint=True)
+        value = rng.integers(self.exact_low, self.exact_high, endpoint=True)
         if self.size == 0:
             return int(value[0])
         return tuple(float(v) for v in value)
@@ -127,7 +148,11 @@ class Choice(Distribution):
 
     @property
     def is_integer(self) -> bool:
-        return bool(np.all(self.values == np.round(self.values)))
+        """Whole numbers that a float holds exactly (larger ones are drawn as floats)."""
+        return bool(
+            np.all(self.values == np.round(self.values))
+            and np.all(np.abs(self.values) <= EXACT_FLOAT_INTEGER)
+        )
 
 
 def parse_distribution(entry: object) -> tuple[Distribution, bool]:
@@ -136,7 +161,9 @@ def parse_distribution(entry: object) -> tuple[Distribution, bool]:
 
     Raises:
         DistributionError: an unknown kind, numbers of different lengths, ``low > high``,
-            a negative standard deviation, a non-finite number, an empty choice.
+            a negative standard deviation, a non-finite number, an empty choice, or
+            numbers NumPy's generator cannot draw from (integer bounds outside int64, a
+            uniform whose ``high - low`` overflows, a normal that could draw infinity).
     """
     if not isinstance(entry, Mapping):
         raise DistributionError(
@@ -167,6 +194,14 @@ def parse_distribution(entry: object) -> tuple[Distribution, bool]:
     if kind == "normal":
         if np.any(high < 0):
             raise DistributionError("normal: the standard deviation must be >= 0")
+        with np.errstate(over="ignore"):
+            reach = np.abs(low) + NORMAL_REACH_STD * high
+        if not np.all(np.isfinite(reach)):
+            raise DistributionError(
+                f"normal: mean {low.tolist()} and std {high.tolist()} are so large that a "
+                f"draw could overflow to infinity (|mean| + {NORMAL_REACH_STD:g} std must "
+                "stay below 1.8e308)"
+            )
         clip = None
         if "clip" in entry:
             clip_low, clip_high, clip_size = _pair("clip", entry["clip"])
@@ -177,9 +212,19 @@ def parse_distribution(entry: object) -> tuple[Distribution, bool]:
         return Normal(low, high, size, clip), relative
     _ordered(kind, low, high)
     if kind == "integers":
-        if not np.all(low == np.round(low)) or not np.all(high == np.round(high)):
-            raise DistributionError("integers: give whole numbers")
-        return Integers(low, high, size), relative
+        exact_low, exact_high = (_int64_bounds(part) for part in numbers)
+        if np.any(exact_low > exact_high):
+            raise DistributionError(
+                f"integers: low {exact_low.tolist()} is above high {exact_high.tolist()}"
+            )
+        return Integers(low, high, size, exact_low, exact_high), relative
+    with np.errstate(over="ignore"):
+        width = high - low
+    if not np.all(np.isfinite(width)):
+        raise DistributionError(
+            f"uniform: high - low overflows ({low.tolist()} to {high.tolist()}); NumPy draws "
+            "a uniform only where high - low is below 1.8e308"
+        )
     return Uniform(low, high, size), relative
 
 
@@ -195,16 +240,55 @@ def _pair(kind: str, numbers: object) -> tuple[np.ndarray, np.ndarray, int]:
 
 
 def _vector(kind: str, part: object) -> tuple[np.ndarray, int]:
-    if is_real(part) and math.isfinite(float(part)):  # type: ignore[arg-type]
+    if _finite(part):
         return np.array([float(part)]), 0  # type: ignore[arg-type]
     if (
         isinstance(part, Sequence)
         and not isinstance(part, str)
         and 0 < len(part) <= 64
-        and all(is_real(x) and math.isfinite(float(x)) for x in part)
+        and all(_finite(x) for x in part)
     ):
         return np.array([float(x) for x in part]), len(part)
-    raise DistributionError(f"{kind}: {part!r} is not a finite number or list of numbers")
+    raise DistributionError(f"{kind}: {_short(part)} is not a finite number or list of numbers")
+
+
+def _finite(value: object) -> bool:
+    """Whether ``value`` is one real number a float holds finitely (a huge int is not)."""
+    if not is_real(value):
+        return False
+    try:
+        return math.isfinite(float(value))  # type: ignore[arg-type]
+    except OverflowError:
+        return False
+
+
+def _int64_bounds(part: object) -> np.ndarray:
+    """One end of ``integers`` as exact int64s (the numbers as written, not as floats).
+
+    Raises:
+        DistributionError: a number that is not whole or lies outside int64.
+    """
+    given: list[Any] = list(part) if isinstance(part, Sequence) else [part]  # real numbers
+    exact = []
+    for number in given:
+        if not isinstance(number, int | np.integer) and not float(number).is_integer():
+            raise DistributionError(
+                f"integers: {_short(number)} is not a whole number; give whole numbers"
+            )
+        whole = int(number)
+        if not INT64_MIN <= whole <= INT64_MAX:
+            raise DistributionError(
+                f"integers: {_short(number)} is outside what can be drawn, the int64 range "
+                f"[{INT64_MIN}, {INT64_MAX}]"
+            )
+        exact.append(whole)
+    return np.array(exact, dtype=np.int64)
+
+
+def _short(value: object) -> str:
+    """``repr(value)``, cut to a length a one-line message can hold."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _ordered(kind: str, low: np.ndarray, high: np.ndarray) -> None:

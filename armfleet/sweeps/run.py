@@ -24,7 +24,7 @@ from armfleet.planning.ompl_search import restart_random_numbers
 from armfleet.sweeps.definition import SweepDefinition
 from armfleet.sweeps.randomization import apply_draws
 from armfleet.sweeps.results_schema import RUN_COLUMNS
-from armfleet.sweeps.run_timeout import RunTimedOut, RunTimeout
+from armfleet.sweeps.run_timeout import TIMED_OUT, RunTimedOut, RunTimeout
 from armfleet.sweeps.task_reference import Task
 from armfleet.world.launch import launch
 
@@ -52,33 +52,38 @@ def run_seed(
     began = time.perf_counter()
     row: Row = {name: None for name in RUN_COLUMNS}
     row.update(seed=seed, ok=False, host=socket.gethostname(), pid=os.getpid(), metrics={})
-    draws = [(parameter, parameter.draw(seed)) for parameter in definition.randomization]
-    for parameter, value in draws:
-        row.update(parameter.row(value))
-    restart_random_numbers(seed)
     world = None
-    limit = RunTimeout(definition.run_timeout_s)
+    bringup_limit = RunTimeout(definition.run_timeout_s, "bring-up")
+    task_limit = RunTimeout(definition.run_timeout_s)
     try:
-        with limit:
+        draws = [(parameter, parameter.draw(seed)) for parameter in definition.randomization]
+        for parameter, value in draws:
+            row.update(parameter.row(value))
+        restart_random_numbers(seed)
+        # The limit is the task's: launching the world (reading models, which a busy
+        # machine slows) has a limit of its own, so a slow bring-up never cuts a task short.
+        with bringup_limit:
             task = task or definition.task.load()
             spec, keywords = apply_draws(definition.spec, draws)
             spec = replace(spec, world=replace(spec.world, viewer=False, realtime=False))
             world = launch(spec, viewer=False, models=models)
-            row["bringup_s"] = time.perf_counter() - began
-            task_began = time.perf_counter()
+        row["bringup_s"] = time.perf_counter() - began
+        task_began = time.perf_counter()
+        with task_limit:
             metrics = task(world, np.random.default_rng(seed), **definition.parameters, **keywords)
-            limit.cancel()  # closing the world must not be cut short
-            row["task_s"] = time.perf_counter() - task_began
-            row["stepping_s"] = world.stepping_s
-            row["sim_time_s"] = world.time
+            task_limit.cancel()  # closing the world must not be cut short
+        row["task_s"] = time.perf_counter() - task_began
+        row["stepping_s"] = world.stepping_s
+        row["sim_time_s"] = world.time
         row["metrics"] = checked_metrics(metrics, reserved=(*RUN_COLUMNS, *row))
         row["ok"] = True
     except RunTimedOut as exc:
-        row["error"] = f"RunTimedOut: {exc}"
+        row["error"] = f"{TIMED_OUT}: {exc}"
     except Exception as exc:  # the task's failure is this run's row, not the sweep's end
         row["error"] = _one_line(exc)
     finally:
-        limit.cancel()
+        bringup_limit.cancel()
+        task_limit.cancel()
         if world is not None:
             if row["sim_time_s"] is None and not world.closed:
                 row["stepping_s"], row["sim_time_s"] = world.stepping_s, world.time

@@ -28,6 +28,7 @@ from armfleet.sweeps.ray_session import RaySession
 from armfleet.sweeps.results_file import ResultsWriter
 from armfleet.sweeps.results_schema import RUN_COLUMNS
 from armfleet.sweeps.run import Row
+from armfleet.sweeps.run_timeout import TIMED_OUT
 
 #: Work per Ray task the batch size aims at [s].
 TASK_TARGET_S = 2.0
@@ -132,8 +133,10 @@ class SweepDriver:
         size = 1 if alone else self._batch_size(len(pending))
         seeds = tuple(pending.popleft() for _ in range(min(size, len(pending))))
         now = time.perf_counter()
-        # Twice its runs' limits: a queued batch may first wait for a worker's last batch.
-        limit = 2 * len(seeds) * (self._definition.run_timeout_s + 10.0) + BACKSTOP_GRACE_S
+        # A run may take its bring-up's limit and its task's; twice that for the batch, as a
+        # queued batch may first wait for a worker's last batch.
+        run_limit_s = 2 * self._definition.run_timeout_s + 10.0
+        limit = 2 * len(seeds) * run_limit_s + BACKSTOP_GRACE_S
         ref = self._remote.remote(self._definition_ref, seeds)
         self._in_flight[ref] = _Batch(seeds, now, now + limit, alone)
 
@@ -178,7 +181,7 @@ class SweepDriver:
                         failed_row(
                             self._definition,
                             batch.seeds[0],
-                            f"RunTimedOut: the worker did not return within {waited:.0f} s "
+                            f"{TIMED_OUT}: the worker did not return within {waited:.0f} s "
                             "(a run stuck where its time limit cannot interrupt it); "
                             "it was killed",
                         )
@@ -196,5 +199,8 @@ def failed_row(definition: SweepDefinition, seed: int, error: str) -> Row:
     row: Row = {name: None for name in RUN_COLUMNS}
     row.update(seed=seed, ok=False, error=error, metrics={})
     for parameter in definition.randomization:
-        row.update(parameter.row(parameter.draw(seed)))
+        try:
+            row.update(parameter.row(parameter.draw(seed)))
+        except Exception:  # a draw that fails leaves its columns empty
+            continue
     return row

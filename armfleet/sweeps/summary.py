@@ -19,6 +19,7 @@ import pyarrow.compute as pc
 
 from armfleet.sweeps.errors import SweepError
 from armfleet.sweeps.results_schema import RUN_COLUMNS, SweepMetadata
+from armfleet.sweeps.run_timeout import TIMED_OUT
 
 #: The standard normal quantile of 97.5 %: a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -211,6 +212,8 @@ class SweepSummary:
         runs: rows in the results.
         ok_runs: runs whose task returned its metrics.
         failed_runs: the other runs.
+        timed_out_runs: of the failed runs, those ended by their time limit
+            (``run_timeout_s``, a limit of wall time: a loaded machine reaches it sooner).
         common_errors: the most common error messages of failed runs, with their counts,
             most common first (at most :data:`COMMON_ERRORS`).
         success: the success rate over every run (see :func:`success_flags`), named after
@@ -226,6 +229,7 @@ class SweepSummary:
     runs: int
     ok_runs: int
     failed_runs: int
+    timed_out_runs: int
     common_errors: tuple[tuple[str, int], ...]
     success: Rate
     numeric: tuple[Distribution, ...]
@@ -237,7 +241,9 @@ class SweepSummary:
         """The summary as a plain-text table for the terminal (no trailing newline)."""
         lines = [
             f"sweep of {self.scenario}: {self.runs} runs, {self.ok_runs} ok, "
-            f"{self.failed_runs} failed"
+            f"{self.failed_runs} failed",
+            f"ended by the time limit: {self.timed_out_runs} runs (run_timeout_s is wall time: "
+            "a loaded machine reaches it sooner)",
         ]
         for i, (message, count) in enumerate(self.common_errors):
             label = "errors" if i == 0 else ""
@@ -312,6 +318,9 @@ def summarize(table: pa.Table) -> SweepSummary:
         runs=table.num_rows,
         ok_runs=int(ok.sum()),
         failed_runs=int(table.num_rows - ok.sum()),
+        timed_out_runs=sum(
+            count for error, count in failed_errors.items() if error.startswith(TIMED_OUT)
+        ),
         common_errors=tuple(failed_errors.most_common(COMMON_ERRORS)),
         success=Rate.of(columns.success_metric or "ok", int(success.sum()), table.num_rows),
         numeric=tuple(

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import importlib.metadata
-import os
+import sys
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -17,9 +17,10 @@ from armfleet.checks.number_ranges import (
     SWEEP_RUNS,
     SWEEP_WORKERS,
 )
-from armfleet.checks.user_paths import file_problem, given_path
+from armfleet.checks.user_paths import file_problem
 from armfleet.sweeps.definition import SweepDefinition, load_sweep
 from armfleet.sweeps.errors import SweepError
+from armfleet.sweeps.output_path import results_path
 from armfleet.sweeps.progress import SweepProgress
 from armfleet.sweeps.ray_session import check_address, ray_session
 from armfleet.sweeps.results_file import ResultsWriter, journal_path, read_results
@@ -114,7 +115,7 @@ def sweep(
         temporary = tempfile.TemporaryDirectory(prefix="armfleet-sweep-")
         path = Path(temporary.name) / "results.parquet"
     else:
-        path = _output_path(output, resume, overwrite)
+        path = results_path(output, resume, overwrite)
     try:
         kept = _kept_rows(path, definition) if resume else None
         done = set() if kept is None else {int(s) for s in kept.column("seed").to_pylist()}
@@ -166,6 +167,11 @@ def _run(
     batch_size: int | None,
     show: bool,
 ) -> tuple[RunCounts, bool]:
+    if show:  # Ray takes seconds to start: say so before the bar appears
+        where = (
+            "a private local Ray instance" if address is None else f"the Ray cluster at {address}"
+        )
+        print(f"sweep: {len(seeds)} runs; starting {where}...", file=sys.stderr, flush=True)
     with ray_session(address, workers) as session:
         writer = ResultsWriter(path, metadata, integers, kept)
         progress = SweepProgress(len(seeds), 0 if kept is None else kept.num_rows, show)
@@ -175,6 +181,12 @@ def _run(
             driver.run(seeds)
         except KeyboardInterrupt:
             interrupted = True
+        except Exception as exc:  # the driver's own failure: one line, the rows kept
+            kept_runs = driver.counts.finished + (0 if kept is None else kept.num_rows)
+            raise SweepError(
+                f"the sweep stopped: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}; "
+                f"{path} keeps its {kept_runs} finished runs (--resume runs the rest)"
+            ) from exc
         finally:
             progress.close()
             writer.close()
@@ -195,26 +207,6 @@ def _configured(
     if base_seed is not None:
         changes["base_seed"] = int(BASE_SEED.check(base_seed, "base_seed"))
     return replace(definition, **changes)  # type: ignore[arg-type]
-
-
-def _output_path(output: str | Path, resume: bool, overwrite: bool) -> Path:
-    path = given_path(output, "results file")
-    if path.suffix != ".parquet":
-        raise SweepError(f"results file {str(output)!r}: give a .parquet file")
-    folder = path.parent
-    if not folder.is_dir():
-        raise SweepError(f"results file {str(output)!r}: folder {str(folder)!r} not found")
-    if not os.access(folder, os.W_OK):
-        raise SweepError(f"results file {str(output)!r}: folder {str(folder)!r} is not writable")
-    exists = file_problem(path) != "not found" or file_problem(journal_path(path)) is None
-    if exists and not resume and not overwrite:
-        raise SweepError(
-            f"{path} exists; --resume runs the seeds it lacks, --overwrite replaces it, or "
-            "give another -o"
-        )
-    if exists and overwrite:
-        journal_path(path).unlink(missing_ok=True)
-    return path
 
 
 def _kept_rows(path: Path, definition: SweepDefinition) -> pa.Table | None:

@@ -1,6 +1,8 @@
 """A sweep's task, named as ``module:function`` or ``file.py[:function]``, found in a worker.
 
-A task is ``task(world, rng, **parameters) -> dict of metrics``. A task in a file is
+A task is ``task(world, rng, **parameters) -> dict of metrics``. A file named without a
+function (``file.py``, or ``file.py:`` with nothing after the colon) means its function
+``task``, or, when it has none, the one public function it defines. A task in a file is
 sent to the workers as its text, so a cluster's machines need not share a folder with
 this one; a task in a module must be importable on every worker (as armfleet's are).
 """
@@ -19,7 +21,8 @@ from typing import Any
 
 from armfleet.checks.user_paths import file_problem
 
-#: The default function of a task file named without ``:function``.
+#: The default function of a task file named without ``:function`` (a file without one
+#: that defines exactly one public function means that one).
 DEFAULT_FUNCTION = "task"
 
 Task = Callable[..., Any]
@@ -39,6 +42,9 @@ class TaskReference:
         function: the function's name in it.
         path: the file, for a task in a file.
         source: the file's text, for a task in a file.
+        by_default: a file named without a function: :attr:`function` is
+            :data:`DEFAULT_FUNCTION`, or the file's only public function if it has no
+            such one.
     """
 
     name: str
@@ -46,6 +52,7 @@ class TaskReference:
     function: str
     path: str | None = None
     source: str | None = None
+    by_default: bool = False
 
     def load(self) -> Task:
         """The task function (imports its module or runs its file once per process).
@@ -62,15 +69,22 @@ class TaskReference:
             module = _file_module(self.path or "", self.source or "")
         task = getattr(module, self.function, None)
         if task is None:
-            functions = sorted(
-                name
-                for name, value in vars(module).items()
-                if inspect.isfunction(value) and not name.startswith("_")
-            )
+            functions = _public_functions(module)
+            if self.by_default and len(functions) == 1:
+                return self._checked(getattr(module, functions[0]))
+            if self.by_default:
+                raise TaskError(
+                    f"{self.name}: no function {self.function!r} in it, and not one function "
+                    f"to take instead (it defines {', '.join(functions) or 'none'}); name "
+                    f"one as {self.name.rstrip(':')}:function"
+                )
             raise TaskError(
                 f"{self.name}: no {self.function!r} in it; its functions: "
                 f"{', '.join(functions) or 'none'}"
             )
+        return self._checked(task)
+
+    def _checked(self, task: object) -> Task:
         if not callable(task) or inspect.isclass(task):
             raise TaskError(
                 f"{self.name} is a {type(task).__name__}, not a function "
@@ -82,20 +96,30 @@ class TaskReference:
 
 def task_reference(text: str, base_dir: Path | None = None) -> TaskReference:
     """Read ``module:function``, ``file.py`` or ``file.py:function`` (a relative file is
-    looked for in ``base_dir`` first, the spec's folder)."""
+    looked for in ``base_dir`` first, the spec's folder). ``file.py`` and ``file.py:``
+    name the file's default task (see :attr:`TaskReference.by_default`).
+
+    Raises:
+        TaskError: a name that is neither form, a file that is no regular file, or a
+            function name that is not an identifier.
+    """
     text = text.strip()
     head, _, function = text.rpartition(":") if ":" in text else (text, "", "")
     if head.endswith(".py") or text.endswith(".py"):
         path_text = head if head.endswith(".py") else text
-        named = ":" in text and head.endswith(".py")  # file.py:function, else file.py
-        function = function if named else DEFAULT_FUNCTION
+        # file.py:function; file.py and file.py: (nothing after the colon) take the default
+        named = ":" in text and head.endswith(".py") and bool(function.strip())
+        function = function.strip() if named else DEFAULT_FUNCTION
+        if not function.isidentifier():
+            raise TaskError(f"task {text!r}: {function!r} is not a function name")
         path = Path(path_text).expanduser()
         if not path.is_absolute() and base_dir is not None and (base_dir / path).exists():
             path = base_dir / path
         problem = file_problem(path)
         if problem is not None:
             raise TaskError(f"task file {path_text!r} {problem}")
-        return TaskReference(text, None, function, str(path.resolve()), path.read_text())
+        source = path.read_text()
+        return TaskReference(text, None, function, str(path.resolve()), source, not named)
     if not function or not all(part.isidentifier() for part in head.split(".")):
         raise TaskError(
             f"task {text!r}: give module:function (e.g. "
@@ -145,6 +169,17 @@ def task_keywords(task: Task, name: str) -> set[str]:
         if parameter.kind == parameter.VAR_KEYWORD:
             keywords.add("**")
     return keywords
+
+
+def _public_functions(module: types.ModuleType) -> list[str]:
+    """The public functions ``module`` defines itself (not those it imports), sorted."""
+    return sorted(
+        name
+        for name, value in vars(module).items()
+        if inspect.isfunction(value)
+        and not name.startswith("_")
+        and value.__module__ == module.__name__
+    )
 
 
 def _file_module(path: str, source: str) -> types.ModuleType:
