@@ -112,6 +112,46 @@ class MotionLimitError(ArmfleetError):
         )
 
 
+class SelfContactError(MotionLimitError):
+    """A motion that would drive an arm into itself, refused before anything moved
+    (see :mod:`armfleet.arms.self_contact`). A motion limit, as a joint limit on the way is.
+
+    Attributes:
+        arm: the arm's name.
+        link, other_link: the two links of the arm that would touch.
+        distance_m: their signed distance [m] where they come closest to touching;
+            negative: overlap.
+        clearance_m: the gap required between two links of one arm [m] (as at spawn).
+        at_target: whether they touch at the target itself (else on the way to it).
+    """
+
+    def __init__(
+        self, arm: str, link: str, other_link: str, distance_m: float, clearance_m: float,
+        at_target: bool,
+    ) -> None:  # fmt: skip
+        self.arm, self.link, self.other_link = arm, link, other_link
+        self.distance_m, self.clearance_m, self.at_target = distance_m, clearance_m, at_target
+        if not at_target:  # where the motion first comes too close: the first contact
+            ArmfleetError.__init__(
+                self,
+                f"{arm} would touch itself on the way to this target ({link} / {other_link} "
+                f"come within {clearance_m * 1e3:g} mm of each other); nothing moved: choose "
+                "another target, or go around with avoid_collisions=True (CLI: "
+                "--avoid-collisions)",
+            )
+            return
+        gap = (
+            f"{-distance_m * 1e3:.1f} mm into each other"
+            if distance_m < 0
+            else f"{distance_m * 1e3:.2f} mm apart, closer than {clearance_m * 1e3:g} mm"
+        )
+        ArmfleetError.__init__(
+            self,
+            f"{arm} would touch itself at this target ({link} / {other_link}, {gap}); "
+            "nothing moved: choose a target clear of itself",
+        )
+
+
 class ProtectiveStopError(ArmfleetError):
     def __init__(self, arm: str, reason: str) -> None:
         self.arm, self.reason = arm, reason

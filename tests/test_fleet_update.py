@@ -64,7 +64,7 @@ def scripted_run(
             if step == 10:
                 world.arm("arm0").gripper.close(force=10.0)
                 target = world.arm(FALLING).positions.copy()
-                target[1] += 2.4  # swing the upright UR5 down through the floor
+                target[1] += 1.8  # swing the upright UR5 down through the floor
                 world.arm(FALLING).move_to(target)
             if step % 400 == 100:
                 for arm in arms[2::5]:

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import armfleet
-from armfleet.errors import ArmFault, ProtectiveStopError
-from armfleet.messages import ArmMode, ArmStatus, CollisionReport, JointState
+from armfleet.errors import ArmFault, ProtectiveStopError, SelfContactError
+from armfleet.messages import ArmMode, ArmStatus, CollisionReport, JointCommand, JointState
 
 MAX_INTERPENETRATION_M = 5e-3
 NORMAL_TRACKING_BOUND_RAD = 1e-3
@@ -91,7 +91,9 @@ def test_contact_with_the_floor_stops_the_arm() -> None:
     with armfleet.World() as world:
         arm = world.spawn("bob", model="ur5")
         target = arm.positions.copy()
-        target[1] += 2.4  # swing the upright arm down through the floor
+        # Swing the upright arm down through the floor (not so far that the target folds
+        # the upper arm into the base: a move refuses that, see test_self_touching_targets).
+        target[1] += 1.8
         arm.move_to(target)
         world.run(3.0)
         status = arm.status(world.time)
@@ -105,14 +107,18 @@ def test_folding_the_wrist_into_the_forearm_stops_the_arm() -> None:
 
     The upstream SRDF disables link5-link7, so before the sampled contact pairs
     (armfleet/physics/contact_pairs.py) this self-contact raised no stop and the
-    wrist pushed 9 mm into the forearm at the joint's limit."""
+    wrist pushed 9 mm into the forearm at the joint's limit. A move refuses this target
+    (SelfContactError, see test_self_touching_targets.py); sent on the raw command topic,
+    which only checks limits, it shows the physics' stop."""
     with armfleet.World() as world:
         arm = world.spawn("bob")
         contacts: list[CollisionReport] = []
         world.bus.subscribe("/collisions", contacts.append)
         target = arm.positions.copy()
         target[5] = arm.joint_limits[0][5] + 0.01  # joint 6 to its lower limit: folded
-        arm.move_to(target)
+        with pytest.raises(SelfContactError, match="bob_panda_link5 / bob_panda_link7"):
+            arm.move_to(target)
+        world.bus.publish("/bob/position_controller/commands", JointCommand(tuple(target)))
         world.run(3.0)
         status = arm.status(world.time)
         assert status.mode is ArmMode.PROTECTIVE_STOP

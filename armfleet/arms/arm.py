@@ -9,10 +9,12 @@ import pinocchio as pin
 
 from armfleet import topics
 from armfleet.arms.gripper import Gripper
+from armfleet.arms.self_contact import SelfContactCheck
 from armfleet.checks.flags import flag
 from armfleet.checks.real_numbers import STAMP_VALID, real_number
 from armfleet.controllers import ControllerManager, JointStateBroadcaster, PositionController
 from armfleet.controllers.gripper_controller import GripperController
+from armfleet.controllers.jerk_limited_trajectory import MotionPlan
 from armfleet.description import ArmDescription
 from armfleet.errors import (
     ArmFault,
@@ -105,6 +107,8 @@ class Arm:
         self._frame_pose = frame_pose
         self._ik = InverseKinematics(kinematics)
         self._linear = LinearPathPlanner(name, self._ik, position_controller)
+        #: Refuses a straight motion that would touch the arm itself (built on first use).
+        self._self_contact = SelfContactCheck(name, description, kinematics, position_controller)
         #: The world's collision-free planner (None for an arm outside a world).
         self._planner = planner
 
@@ -285,9 +289,14 @@ class Arm:
         of in a straight line, keeping ``clearance_m`` from other bodies (see
         :meth:`plan`); it must be at rest.
 
+        A straight motion that would bring the arm within 1 mm of itself, at the target
+        or on the way (the jerk-limited path it follows), is refused, as spawn refuses
+        such a start (see :mod:`armfleet.arms.self_contact`).
+
         Raises:
             TargetLengthError, NonFiniteTarget, JointLimitError, MotionLimitError,
-            ProtectiveStopError, ArmFault: nothing is sent and the current motion goes on.
+            SelfContactError (naming the two links), ProtectiveStopError, ArmFault:
+            nothing is sent and the current motion goes on.
             PlanningFailed, ArmInMotion: with ``avoid_collisions``; nothing moves.
         """
         options = MoveOptions.given(avoid_collisions, clearance_m, timeout_s, budget)
@@ -298,6 +307,7 @@ class Arm:
         if self._controller_manager.fault is not None:
             raise ArmFault(self._name, self._controller_manager.fault)
         motion = self._position_controller.plan(values)
+        self.check_self_contact(motion)
         self._publish_command(values)
         return motion.duration
 
@@ -339,6 +349,13 @@ class Arm:
         return self._world_planner().plan(
             {self._name: goal}, clearance_m=clearance_m, timeout_s=timeout_s, budget=budget
         )
+
+    @while_alive
+    def check_self_contact(self, motion: MotionPlan) -> None:
+        """Raise :class:`~armfleet.errors.SelfContactError` if ``motion`` (made by the
+        position controller from its reference, not yet followed) would bring the arm
+        within 1 mm of itself, at its target or on the way."""
+        self._self_contact.check_plan(motion, self._body.position)
 
     def _world_planner(self) -> MotionPlanner:
         if self._planner is None:
@@ -434,6 +451,9 @@ class Arm:
         start[self._kinematics.arm_indices] = controller.trajectory.position
         motion = self._linear.plan(link_frame, link, start, goal)
         controller.check_samples(motion)
+        self._self_contact.check_samples(
+            controller.trajectory.position, motion, controller.period, self._body.position
+        )
         self._publish_command(motion.position[-1])  # for the record; the samples replace it
         controller.follow_samples(motion)
         return motion.steps * controller.period

@@ -133,6 +133,11 @@ class ArmDriver:
         return position
 
     # -- what the world starts -------------------------------------------------------------
+    def check_self_contact(self, plan: MotionPlan) -> None:
+        """Raise :class:`~armfleet.errors.SelfContactError` if ``plan`` (made by
+        ``position_controller.plan`` at this step) would bring the arm within 1 mm of itself."""
+        self._arm.check_self_contact(plan)
+
     def start_plan(self, values: FloatArray, plan: MotionPlan) -> None:
         """Follow ``plan`` to ``values``, made by ``position_controller.plan`` at this step
         (with a common duration, by ``move_together``)."""

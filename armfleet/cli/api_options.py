@@ -7,9 +7,15 @@ import sys
 from typing import TYPE_CHECKING
 
 from armfleet.checks.network_address import DEFAULT_BIND, check_bind_host
-from armfleet.cli.number_arguments import port_or_free, request_timeout
+from armfleet.cli.number_arguments import integer_in, port_or_free, request_timeout
 from armfleet.cli.parser import OneLineParser
 from armfleet.remote.client import DEFAULT_TIMEOUT_S, Client, connect
+from armfleet.remote.client_quotas import (
+    QUOTA_COUNT,
+    QUOTA_REQUESTS,
+    RAISED_BY,
+    ClientQuotas,
+)
 
 if TYPE_CHECKING:  # the server side loads only for the commands that start a world
     from armfleet.remote.server import WorldServer
@@ -33,6 +39,40 @@ def add_api_arguments(parser: argparse.ArgumentParser) -> None:
         help="TCP port of the API (default: a free one)",
     )  # fmt: skip
     group.add_argument("--no-api", action="store_true", help="do not serve the live API")
+    add_quota_arguments(parser)
+
+
+#: What each quota option bounds, for its help.
+_QUOTA_HELP = {
+    "arms_per_client": "arms one client may have in the world",
+    "objects_per_client": "objects one client may have in the world",
+    "requests_per_client": "requests one client may have in flight",
+    "world_arms": "arms in the world (whoever spawned them) past which clients spawn none",
+    "world_objects": "objects in the world past which clients add none",
+}
+
+
+def add_quota_arguments(parser: argparse.ArgumentParser) -> None:
+    """The world's capacity policy for its clients (:class:`ClientQuotas`)."""
+    group = parser.add_argument_group(
+        "capacity (what clients of the live API may add; refused past it, in one line)"
+    )
+    defaults = ClientQuotas()
+    for quota, option in RAISED_BY.items():
+        valid = QUOTA_REQUESTS if quota == "requests_per_client" else QUOTA_COUNT
+        group.add_argument(
+            option, dest=f"quota_{quota}", type=integer_in(valid),
+            default=getattr(defaults, quota), metavar="N",
+            help=f"{_QUOTA_HELP[quota]} (default {getattr(defaults, quota)})",
+        )  # fmt: skip
+
+
+def quotas_from(args: argparse.Namespace) -> ClientQuotas:
+    """The quotas the options set (the defaults for those not given)."""
+    defaults = ClientQuotas()
+    return ClientQuotas(
+        **{quota: getattr(args, f"quota_{quota}", getattr(defaults, quota)) for quota in RAISED_BY}
+    )
 
 
 def check_api_arguments(args: argparse.Namespace) -> None:
@@ -54,6 +94,7 @@ def start_api(world: World, run_state: RunState, args: argparse.Namespace) -> Wo
         run_state,
         host=getattr(args, "api_bind", DEFAULT_BIND),
         port=getattr(args, "api_port", 0),
+        quotas=quotas_from(args),
     )
     if not getattr(args, "quiet", False):
         print(f"api: {server.address}", flush=True)

@@ -7,6 +7,7 @@ from pathlib import PurePath
 from typing import Any
 
 from armfleet.cli.api_options import add_remote_command, connect_from
+from armfleet.cli.number_format import fixed
 from armfleet.cli.parser import OneLineParser
 
 
@@ -25,8 +26,8 @@ def run(args: argparse.Namespace) -> int:
     )
     for arm in arms:
         pose = arm["pose"]
-        at = f"{pose['x']:.2f}, {pose['y']:.2f}, {pose['z']:.2f}, {pose['yaw_deg']:.0f}"
-        q = " ".join(f"{v:+.3f}" for v in arm["positions"])
+        at = ", ".join([*(fixed(pose[axis], 2) for axis in "xyz"), fixed(pose["yaw_deg"], 0)])
+        q = " ".join(fixed(v, 3, "+") for v in arm["positions"])
         mode = arm["mode"] + (f" ({arm['reason']})" if arm["reason"] else "")
         gripper = _gripper(arm.get("gripper"))
         model = _short_model(arm["model"])
@@ -50,4 +51,5 @@ def _gripper(state: dict[str, Any] | None) -> str:
     if state is None:
         return "-"
     unit = state.get("width_unit", "m")  # worlds before revolute jaws: fingers, metres
-    return f"{state['width']:.4f} {unit} " + ("holding" if state["holding"] else state["mode"])
+    width = fixed(state["width"], 4)
+    return f"{width} {unit} " + ("holding" if state["holding"] else state["mode"])

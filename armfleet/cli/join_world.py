@@ -13,6 +13,7 @@ from armfleet.checks.network_address import DEFAULT_BIND
 from armfleet.cli.parser import UsageError
 from armfleet.messages import BringupEvent, BringupStage
 from armfleet.remote import Client, NoWorldFound, connect, runtime_file
+from armfleet.remote.client_quotas import RAISED_BY, ClientQuotas
 from armfleet.remote.runtime_file import WorldEntry
 from armfleet.spec import FleetSpec
 
@@ -33,6 +34,10 @@ _NEW_WORLD_OPTIONS = (
     ("--foxglove", "foxglove", None),
     ("--foxglove-bind", "foxglove_bind", DEFAULT_BIND),
     ("--foxglove-rate", "foxglove_rate", None),
+    *(
+        (option, f"quota_{quota}", getattr(ClientQuotas(), quota))
+        for quota, option in RAISED_BY.items()
+    ),
 )
 
 

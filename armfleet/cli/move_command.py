@@ -11,6 +11,7 @@ import numpy as np
 from armfleet.checks.number_ranges import ANGLE_DEG, WORLD_COORDINATE_M
 from armfleet.cli.api_options import add_remote_command, connect_from
 from armfleet.cli.number_arguments import wait_timeout
+from armfleet.cli.number_format import fixed
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.planning_arguments import add_planning_arguments, planning_keywords
 from armfleet.messages import FloatArray
@@ -76,7 +77,7 @@ def move_joints(args: argparse.Namespace) -> int:
     with connect_from(args) as client:
         arm = client.arm(args.name)
         duration = arm.move_to(args.joints, **planning)
-        target = " ".join(f"{v:+.3f}" for v in args.joints)
+        target = " ".join(fixed(v, 3, "+") for v in args.joints)
         if not args.wait:
             how = " around obstacles" if planning else ""
             print(f"{arm.name}: moving to [{target}]{how}, {duration:.2f} s")
@@ -99,7 +100,7 @@ def move_pose(args: argparse.Namespace) -> int:
         duration = arm.move_to_pose(
             goal, args.frame, link=args.link, linear=args.linear, **planning
         )
-        where = f"({', '.join(f'{v:.4f}' for v in values[:3])}) m in {args.frame}"
+        where = f"({', '.join(fixed(v, 4) for v in values[:3])}) m in {args.frame}"
         if not args.wait:
             how = " around obstacles" if planning else ""
             print(f"{arm.name}: moving {args.link} to {where}{how}, {duration:.2f} s")
@@ -107,7 +108,7 @@ def move_pose(args: argparse.Namespace) -> int:
         state = arm.wait(args.wait_timeout)
         reached = _link_position(client, arm, args.frame, args.link)
         miss_mm = float(np.linalg.norm(reached - np.array(values[:3]))) * 1e3
-        at = ", ".join(f"{v:.4f}" for v in reached)
+        at = ", ".join(fixed(v, 4) for v in reached)
         print(
             f"{arm.name}: holding {args.link} at ({at}) m in {args.frame}, {miss_mm:.2f} mm from "
             f"the goal, t={state.stamp:.3f}s"

@@ -3,6 +3,10 @@
 ``echo --timeout S`` bounds the whole command: it ends within about S seconds
 whatever the world does (silent topic, topic removed, world gone or hung).
 Without it, ``echo`` runs until Ctrl-C, its topic goes away, or the world does.
+
+A topic may be silent for long (``/collisions`` publishes only while something touches):
+when nothing has come within :data:`LISTENING_HINT_S` of subscribing, ``echo`` says once, on
+stderr, that it is listening (not with ``--once``, whose caller waits for one message).
 """
 
 from __future__ import annotations
@@ -26,6 +30,8 @@ from armfleet.services.errors import RequestTimeout
 
 #: Messages ``echo`` holds for the terminal before dropping the oldest.
 ECHO_QUEUE = 100
+#: Silence after subscribing before ``echo`` says it is listening [s].
+LISTENING_HINT_S = 1.0
 
 
 def add_parser(subparsers: argparse._SubParsersAction[OneLineParser]) -> None:
@@ -91,7 +97,15 @@ def echo_topic(args: argparse.Namespace) -> int:
         if limit is not None:
             client.timeout = max(1e-3, 0.5 * (limit - (time.monotonic() - started)))
         subscription = client.subscribe(args.topic, keep, rate_hz=rate)
+        hint_at = None if args.once else time.monotonic() + LISTENING_HINT_S
         while True:  # until --once, --timeout, Ctrl-C, or a closed pipe (armfleet ... | head)
+            if hint_at is not None and time.monotonic() >= hint_at:
+                hint_at = None
+                print(
+                    f"listening on {args.topic}; nothing published on it yet (Ctrl-C to stop)",
+                    file=sys.stderr,
+                    flush=True,
+                )
             wait = 0.25
             if limit is not None:
                 left = limit - (time.monotonic() - started)
@@ -106,6 +120,7 @@ def echo_topic(args: argparse.Namespace) -> int:
                 if not subscription.active:
                     raise subscription.error or ConnectionLost("the world went away") from None
                 continue
+            hint_at = None  # messages show it is listening
             sys.stdout.write(format_message(message) + "---\n")
             sys.stdout.flush()
             if args.once:

@@ -120,6 +120,17 @@ class JerkLimitedTrajectory:
         if self._stepper is not None:
             self._stepper.bind(position, velocity, acceleration)
 
+    def on_restored(self) -> None:
+        """Forget the motion Ruckig's solvers keep in compiled code (a world restored from a
+        snapshot, :mod:`armfleet.world.world_snapshot`): the next motion is calculated
+        afresh, as by solvers just made, whatever they followed before."""
+        dofs, period = self._otg.degrees_of_freedom, self._otg.delta_time
+        self._otg.reset()
+        self._output = ruckig.OutputParameter(dofs)
+        if self._stepper is not None:
+            self._stepper = type(self._stepper)(dofs, period)
+            self._stepper.bind(self.position, self.velocity, self.acceleration)
+
     @property
     def moving(self) -> bool:
         return self._moving

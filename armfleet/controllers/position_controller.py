@@ -497,7 +497,9 @@ def check_target(
     Raises:
         TargetLengthError, NonFiniteTarget, JointLimitError.
     """
-    if not all_real(target):  # not text, bool, complex or None, which float() would take
+    # A list of plain floats (the commands the arms send themselves) is real as it is.
+    plain = type(target) is list and all(type(value) is float for value in target)
+    if not plain and not all_real(target):  # not text, bool, complex or None (float() takes)
         raise TargetTypeError(arm, joint_names)
     try:
         values = np.asarray(target, dtype=float).reshape(-1)

@@ -34,6 +34,10 @@ class SynchronisedArm(Protocol):
         """SynchronisedArm joint positions that put ``link`` at ``pose`` in ``frame``."""
         ...
 
+    def check_self_contact(self, plan: MotionPlan) -> None:
+        """Raise ``SelfContactError`` if ``plan`` (made at this step) would bring the arm
+        within the clearance of itself (see :mod:`armfleet.arms.self_contact`)."""
+
     def start_plan(self, values: FloatArray, plan: MotionPlan) -> None:
         """Follow ``plan`` (made at this step) to ``values``."""
 
@@ -59,8 +63,12 @@ def move_together(arms: Mapping[str, tuple[SynchronisedArm, Any]]) -> float:
     Args:
         arms: per arm name, the arm and its target (see :func:`joint_target`).
 
+    Each arm's motion, as planned with the common duration, is checked against touching
+    the arm itself before any arm starts.
+
     Raises:
-        ArmfleetError: any arm's target or state is bad; then no arm moves.
+        ArmfleetError: any arm's target or state is bad, or its motion would touch the
+            arm itself (``SelfContactError``); then no arm moves.
     """
     if not arms:
         raise ArmfleetError("move_together needs at least one arm: {'<arm>': target, ...}")
@@ -81,6 +89,8 @@ def move_together(arms: Mapping[str, tuple[SynchronisedArm, Any]]) -> float:
         raise TrajectoryError(
             f"Ruckig found no common duration for {', '.join(arms)}; move them one by one"
         )
+    for name, (arm, _) in targets.items():
+        arm.check_self_contact(plans[name])
     for name, (arm, values) in targets.items():
         arm.start_plan(values, plans[name])
     return max(plan.duration for plan in plans.values())

@@ -34,6 +34,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from armfleet.errors import ObjectCollision
+from armfleet.objects.arm_path_clearance import ArmMotion, check_clear_of_motions
 from armfleet.objects.object_spec import ObjectSpec
 from armfleet.objects.world_object import WorldObject
 from armfleet.physics.start_clearance import CLEARANCE_M, BodyKind, Neighbour, closest_pairs
@@ -101,16 +102,22 @@ def place_clear_object(
     on_teleport: Callable[[WorldObject], None] | None = None,
     lifetime: Lifetime | None = None,
     on_remove: Callable[[str], None] | None = None,
+    motions: Iterable[ArmMotion] = (),
 ) -> WorldObject:
-    """Make the object ``spec`` describes, if it breaks no rule of this module where it is.
+    """Make the object ``spec`` describes, if it breaks no rule of this module where it is,
+    nor stands in the remaining path of a moving arm (``motions``, see
+    :mod:`armfleet.objects.arm_path_clearance`).
 
     Raises:
         ObjectCollision: it would; its body is removed again.
+        ObjectInArmPath: a moving arm would pass through it or too close; its body is
+            removed again.
         ObjectError: PyBullet cannot load its mesh.
     """
     obj = WorldObject(spec, client, on_teleport, lifetime, on_remove)
     try:
         check_object_clearance(client, obj.name, obj.body_id, obj.is_static, neighbours)
+        check_clear_of_motions(client, obj.name, obj.body_id, motions)
     except BaseException:
         obj.discard_body()
         raise

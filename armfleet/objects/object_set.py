@@ -6,9 +6,10 @@ against its arms before calling :meth:`ObjectSet.add`.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from armfleet.errors import UnknownObject
+from armfleet.objects.arm_path_clearance import ArmMotion
 from armfleet.objects.object_clearance import check_object_clearance, place_clear_object
 from armfleet.objects.object_frames import ObjectFramePublisher
 from armfleet.objects.object_spec import ObjectSpec
@@ -66,12 +67,17 @@ class ObjectSet:
             raise UnknownObject(name, list(self._objects))
         return self._objects[name]
 
-    def add(self, spec: ObjectSpec, stamp: float) -> WorldObject:
+    def add(self, spec: ObjectSpec, stamp: float, motions: Iterable[ArmMotion] = ()) -> WorldObject:
         """Make ``spec``'s body and frame at simulated time ``stamp`` [s] (name already checked).
+
+        Args:
+            motions: the moving arms' remaining motions, which it must keep clear of.
 
         Raises:
             ObjectCollision: it would touch an arm or overlap the floor or an object
                 (:mod:`armfleet.objects.object_clearance`); nothing was added.
+            ObjectInArmPath: it stands in a moving arm's path
+                (:mod:`armfleet.objects.arm_path_clearance`); nothing was added.
         """
         name = spec.name
         lifetime = Lifetime(lambda: UnknownObject(name, list(self._objects)), self._lifetime)
@@ -82,6 +88,7 @@ class ObjectSet:
             self._teleported,
             lifetime,
             self._on_remove,
+            motions,
         )
         self._objects[obj.name] = obj
         self._contacts.add_object(obj.name, obj.body_id, static=obj.is_static)

@@ -17,6 +17,7 @@ from armfleet.runtime.lazy_exports import lazy_exports
 
 if TYPE_CHECKING:  # the names below, for type checkers; loaded on first use
     from armfleet.remote.client import Client, connect
+    from armfleet.remote.client_quotas import ClientQuotas, QuotaExceeded
     from armfleet.remote.remote_arm import RemoteArm
     from armfleet.remote.remote_gripper import RemoteGripper
     from armfleet.remote.remote_subscription import RemoteSubscription
@@ -40,6 +41,8 @@ __getattr__, __dir__ = lazy_exports(
     {
         "Client": "armfleet.remote.client",
         "connect": "armfleet.remote.client",
+        "ClientQuotas": "armfleet.remote.client_quotas",
+        "QuotaExceeded": "armfleet.remote.client_quotas",
         "RemoteArm": "armfleet.remote.remote_arm",
         "RemoteGripper": "armfleet.remote.remote_gripper",
         "RemoteSubscription": "armfleet.remote.remote_subscription",
@@ -63,10 +66,12 @@ __getattr__, __dir__ = lazy_exports(
 
 __all__ = [
     "Client",
+    "ClientQuotas",
     "ConnectionLost",
     "NoWorldFound",
     "ObjectInfo",
     "ProtocolError",
+    "QuotaExceeded",
     "RemoteArm",
     "RemoteError",
     "RemoteGripper",

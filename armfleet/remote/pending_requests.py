@@ -1,10 +1,12 @@
 """Requests handed to the stepping thread and not yet answered.
 
-Limits are per client (per ZeroMQ peer): one client with
-:data:`~armfleet.services.protocol.MAX_IN_FLIGHT_PER_CLIENT` requests unanswered (its
-replies held unread included) is refused more, in a reply to each, while the
-others are served. The whole server's :data:`MAX_PENDING_REQUESTS` only protects
-the world's queue. The requests of a client that disconnected are cancelled.
+Limits are per client (per ZeroMQ peer): one client with as many requests
+unanswered as its quota (``ClientQuotas.requests_per_client`` of
+:mod:`armfleet.remote.client_quotas`,
+:data:`~armfleet.services.protocol.MAX_IN_FLIGHT_PER_CLIENT` by default; its replies
+held unread included) is refused more, in a reply to each, while the others are served.
+The whole server's :data:`MAX_PENDING_REQUESTS` only protects the world's queue.
+The requests of a client that disconnected are cancelled.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from armfleet.errors import ArmfleetError
+from armfleet.remote.client_quotas import how_to_raise
 from armfleet.remote.outbox import Outbox
 from armfleet.remote.wakeup import Wakeup
 from armfleet.services.errors import ConnectionLost, RequestTimeout, TooManyRequests
@@ -53,9 +56,15 @@ class PendingRequests:
     """
 
     def __init__(
-        self, world: World, outbox: Outbox, wakeup: Wakeup, run_state: RunState | None
+        self,
+        world: World,
+        outbox: Outbox,
+        wakeup: Wakeup,
+        run_state: RunState | None,
+        max_in_flight: int = MAX_IN_FLIGHT_PER_CLIENT,
     ) -> None:
         self._world = world
+        self._max_in_flight = max_in_flight
         self._outbox = outbox
         self._wakeup = wakeup
         self._run_state = run_state
@@ -100,11 +109,38 @@ class PendingRequests:
         Raises:
             TooManyRequests: ``peer`` has too many requests in flight already.
         """
+        self.repeat(peer, request_id, Service.WAIT, check, timeout=timeout, what=what)
+
+    def repeat(
+        self,
+        peer: bytes,
+        request_id: int | None,
+        service: Service,
+        work: Callable[[], Any],
+        *,
+        timeout: float | None = None,
+        what: str = "",
+        wake: bool = False,
+    ) -> None:
+        """Run ``work`` at step boundaries, again and again, until it returns something
+        (the reply) or raises (the error reply). Each call goes to the back of the
+        world's queue, so the requests that came meanwhile run between two calls.
+
+        Args:
+            timeout: reply ``RequestTimeout("<what> after <timeout> s")`` once this much
+                wall time has passed [s]; None: no limit.
+            wake: wake a paused loop for every call (work that makes progress by itself,
+                as stepping), rather than calling it once per step or pause period.
+
+        Raises:
+            TooManyRequests: ``peer`` has too many requests in flight already.
+        """
         self._check_room(peer)
         outcome: Future[Any] = Future()
         outcome.set_running_or_notify_cancel()
-        deadline = time.monotonic() + timeout
-        pending = _Pending(peer, request_id, Service.WAIT, outcome, timeout, None)
+        deadline = None if timeout is None else time.monotonic() + timeout
+        pending = _Pending(peer, request_id, service, outcome, timeout or 0.0, None)
+        run_state = self._run_state if wake else None
 
         def settle(value: Any = None, error: BaseException | None = None) -> None:
             with contextlib.suppress(InvalidStateError):
@@ -124,15 +160,18 @@ class PendingRequests:
                     return
             if pending.abandoned:
                 settle(error=ConnectionLost("the client went away"))
-            elif time.monotonic() > deadline:
+            elif deadline is not None and time.monotonic() > deadline:
                 settle(error=RequestTimeout(f"{what} after {timeout:g} s"))
             elif self._stopping:
                 settle(error=ConnectionLost("the world is shutting down"))
             else:
                 try:
-                    self._world.submit(check).add_done_callback(poll)
+                    self._world.submit(work).add_done_callback(poll)
                 except Exception as exc:
                     settle(error=exc)
+                    return
+                if run_state is not None:
+                    run_state.wake()
 
         poll(None)
         self._track(pending)
@@ -142,8 +181,8 @@ class PendingRequests:
         return len(self._pending) if peer is None else self._per_peer[peer]
 
     def _check_room(self, peer: bytes) -> None:
-        if self._per_peer[peer] + self._outbox.held(peer) >= MAX_IN_FLIGHT_PER_CLIENT:
-            raise TooManyRequests(MAX_IN_FLIGHT_PER_CLIENT)
+        if self._per_peer[peer] + self._outbox.held(peer) >= self._max_in_flight:
+            raise TooManyRequests(self._max_in_flight, how_to_raise("requests_per_client"))
         if len(self._pending) >= MAX_PENDING_REQUESTS:
             raise ArmfleetError(
                 f"the world has {len(self._pending)} requests in flight from "

@@ -11,7 +11,11 @@ at most.
 Limits are per client: a client with too many requests in flight is refused
 more, one reply each, while the others are served; every request gets exactly
 one reply (held while its client does not read); and the requests of a client
-that disconnects are cancelled (see :mod:`armfleet.remote.peer_watch`).
+that disconnects are cancelled (see :mod:`armfleet.remote.peer_watch`). The
+world's owner sets what clients may add (:mod:`armfleet.remote.client_quotas`).
+A ``step`` request steps in slices, so other clients are served while it runs
+(:mod:`armfleet.remote.sliced_steps`), and a stream answers only to the client
+that opened it (:mod:`armfleet.remote.streams`).
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import logging
 import os
 import threading
 import time
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -35,9 +40,11 @@ from armfleet.checks.network_address import (
 from armfleet.checks.number_ranges import REQUEST_TIMEOUT_S, WAIT_TIMEOUT_S
 from armfleet.errors import ArmfleetError
 from armfleet.remote import runtime_file
+from armfleet.remote.client_quotas import ClientQuotas, QuotaLedger
 from armfleet.remote.outbox import Outbox
 from armfleet.remote.peer_watch import PeerWatch
 from armfleet.remote.pending_requests import PendingRequests
+from armfleet.remote.sliced_steps import SlicedSteps
 from armfleet.remote.streams import StreamHub
 from armfleet.remote.wakeup import Wakeup
 from armfleet.services.arguments import Arguments
@@ -65,6 +72,8 @@ STREAM_FLUSH_PERIOD_S = 0.002
 #: Requests read in one go before replies and streams get a turn.
 READ_BURST = 256
 _REQUEST_KEYS = ("id", "op", "args", "timeout_s")
+#: Fields of ``attach``: the key of the request connection that owns the stream.
+_ATTACH_FIELDS = ("owner",)
 
 
 class ServerError(ArmfleetError):
@@ -84,9 +93,12 @@ class WorldServer:
         port: TCP port; a free one if 0.
         register: name this world in the per-user runtime file, so that clients
             find it without an address (unless another running world holds it).
+        quotas: what each client, and all clients together, may add (arms, objects,
+            requests in flight); :class:`ClientQuotas`' defaults if None.
 
     Raises:
         ServerError: the address cannot be bound.
+        ArmfleetError: ``quotas`` is not a :class:`ClientQuotas`.
     """
 
     def __init__(
@@ -97,10 +109,22 @@ class WorldServer:
         host: str = DEFAULT_BIND,
         port: int = 0,
         register: bool = True,
+        quotas: ClientQuotas | None = None,
     ) -> None:
         host = check_bind_host(host)
+        if quotas is None:
+            quotas = ClientQuotas()
+        elif not isinstance(quotas, ClientQuotas):
+            raise ArmfleetError(
+                f"quotas must be an armfleet.remote.ClientQuotas (or None for the defaults), "
+                f"got {type(quotas).__name__}"
+            )
+        #: What clients may add, as the world's owner set it.
+        self.quotas = quotas
+        self._ledger = QuotaLedger(quotas)
         register = flag(register, "register")  # 'no' would name this world to every client
         self._world = world
+        self._run_state = run_state
         self._context = zmq.Context()
         self._socket = self._context.socket(zmq.ROUTER)
         self._configure_socket(host)
@@ -124,7 +148,9 @@ class WorldServer:
         self._wakeup = Wakeup()
         outbox = Outbox(self._socket)
         self._services = WorldServices(world, run_state, self.address)
-        self._pending = PendingRequests(world, outbox, self._wakeup, run_state)
+        self._pending = PendingRequests(
+            world, outbox, self._wakeup, run_state, quotas.requests_per_client
+        )
         self._streams = StreamHub(world, outbox)
         self._outbox = outbox
         self._peers = PeerWatch(self._socket)
@@ -241,6 +267,8 @@ class WorldServer:
             cancelled = self._pending.cancel_client(peer)
             self._outbox.forget(peer)
             self._streams.detach(peer, None)
+            self._streams.forget_connection(peer)
+            self._ledger.forget(peer)
             if cancelled:
                 logger.info("a client went away; cancelled its %d request(s)", cancelled)
 
@@ -262,7 +290,8 @@ class WorldServer:
             top.integer("id", low=0, high=2**63 - 1)
             service = require_known(top.text("op"))
             timeout = top.in_range("timeout_s", DEFAULT_REQUEST_TIMEOUT_S, REQUEST_TIMEOUT_S)
-            args = Arguments(service.value, request.get("args"), FIELDS[service])
+            fields = _ATTACH_FIELDS if service is Service.ATTACH else FIELDS[service]
+            args = Arguments(service.value, request.get("args"), fields)
             self._dispatch(peer, request_id, service, args, timeout)
         except ArmfleetError as exc:
             logger.info("refused a request: %s", exc)
@@ -276,19 +305,23 @@ class WorldServer:
     ) -> None:
         reply = self._outbox.reply
         if service is Service.HELLO:
-            reply(peer, request_id, self._hello(args))
+            reply(peer, request_id, self._hello(peer, args))
         elif service is Service.ATTACH:
-            reply(peer, request_id, {"stream": self._streams.attach(peer).token})
+            stream = self._streams.attach(peer, args.text("owner", None))
+            reply(peer, request_id, {"stream": stream.token})
         elif service is Service.DETACH:
             self._streams.detach(peer, args.text("stream", None))
             reply(peer, request_id, None)
         elif service is Service.UNSUBSCRIBE:
-            self._streams.unsubscribe(args)
+            self._streams.unsubscribe(peer, args)
             reply(peer, request_id, None)
         elif service is Service.SUBSCRIBE:
-            topic, queue, register = self._streams.prepare_subscription(args)
+            topic, queue, register = self._streams.prepare_subscription(peer, args)
             subscribe = self._services.subscribe(topic, queue)
             self._pending.submit(peer, request_id, service, subscribe, timeout, register)
+        elif service is Service.STEP:
+            steps = SlicedSteps.from_request(self._world, self._run_state, args, timeout)
+            self._pending.repeat(peer, request_id, service, steps, wake=True)
         elif service is Service.WAIT:
             name = args.text("name")
             duration = args.in_range("timeout_s", timeout, WAIT_TIMEOUT_S)
@@ -300,10 +333,16 @@ class WorldServer:
         else:
             work = self._services.prepare(service, args)
             assert work is not None  # every other service is plain
+            world = self._world
+            if service is Service.SPAWN:
+                work = self._ledger.spawning(peer, args.text("name"), lambda: world.arms, work)
+            elif service is Service.ADD_OBJECT:
+                name = args.text("name")
+                work = self._ledger.adding_object(peer, name, lambda: world.objects, work)
             finish = self._add_server_info if service is Service.INFO else None
             self._pending.submit(peer, request_id, service, work, timeout, finish)
 
-    def _hello(self, args: Arguments) -> dict[str, Any]:
+    def _hello(self, peer: bytes, args: Arguments) -> dict[str, Any]:
         protocol = args.integer("protocol", low=0, high=2**31)
         if protocol != PROTOCOL_VERSION:
             raise ProtocolError(
@@ -315,6 +354,8 @@ class WorldServer:
             "version": armfleet_version(),
             "pid": os.getpid(),
             "address": self.address,
+            # The stream socket of this client attaches with it: the stream is then theirs.
+            "connection": self._streams.connection_key(peer),
         }
 
     def _add_server_info(self, info: dict[str, Any]) -> dict[str, Any]:
@@ -323,6 +364,7 @@ class WorldServer:
             "streams": len(self._streams.streams),
             "subscriptions": self._streams.subscription_count,
             "requests": self._pending.in_flight(),
+            "quotas": asdict(self.quotas),
         }
 
 
@@ -333,6 +375,7 @@ def serve(
     host: str = DEFAULT_BIND,
     port: int = 0,
     register: bool = True,
+    quotas: ClientQuotas | None = None,
 ) -> WorldServer:
     """Serve ``world``'s live API; see :class:`WorldServer`. Close it when done."""
-    return WorldServer(world, run_state, host=host, port=port, register=register)
+    return WorldServer(world, run_state, host=host, port=port, register=register, quotas=quotas)

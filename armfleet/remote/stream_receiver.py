@@ -52,14 +52,23 @@ class LocalSubscription:
 class StreamReceiver:
     """The stream socket of a client and the thread that owns it.
 
+    Args:
+        owner: the key ``hello`` returned on the client's request connection: the stream
+            is then theirs alone (see :mod:`armfleet.remote.streams`).
+
     Raises:
         NoWorldFound: the world did not accept the stream within ``timeout`` [s].
     """
 
     def __init__(
-        self, context: zmq.Context[zmq.Socket[bytes]], address: str, timeout: float
+        self,
+        context: zmq.Context[zmq.Socket[bytes]],
+        address: str,
+        timeout: float,
+        owner: str | None = None,
     ) -> None:
         self._context = context
+        self._owner = owner
         self._address = address
         self._subscriptions: dict[int, LocalSubscription] = {}
         self._keys = itertools.count(1)
@@ -101,7 +110,8 @@ class StreamReceiver:
         socket.setsockopt(zmq.LINGER, 0)
         socket.setsockopt(zmq.RCVHWM, RECEIVE_HWM)
         socket.connect(self._address)
-        socket.send(pack({"id": 0, "op": "attach", "args": {}}), zmq.NOBLOCK)
+        attach = {} if self._owner is None else {"owner": self._owner}
+        socket.send(pack({"id": 0, "op": "attach", "args": attach}), zmq.NOBLOCK)
         last_heard = time.monotonic()
         try:
             while not self._stop.is_set():

@@ -1,4 +1,15 @@
-"""Server side of the client streams: which subscriptions each stream holds, and batching."""
+"""Server side of the client streams: which subscriptions each stream holds, and batching.
+
+A stream belongs to the client that opened it. A client talks to the world on two
+connections: requests on one, topic messages pushed on the other (its stream socket).
+``hello`` on the request connection returns a key naming that connection, and the
+stream socket attaches with it (``attach {"owner": key}``); from then on, only those two
+connections may ``subscribe``, ``unsubscribe`` or ``detach`` on that stream. A stream
+attached without a key answers only to its own socket. Any other connection naming its
+token is refused with :class:`StreamNotYours`, the stream untouched. Before, a client
+holding another's token could detach its stream or cancel its subscriptions, and that
+client went on believing them active while receiving nothing.
+"""
 
 from __future__ import annotations
 
@@ -28,6 +39,21 @@ from armfleet.world import World
 logger = logging.getLogger("armfleet")
 
 
+class StreamNotYours(ArmfleetError):
+    """A request named the stream of another client; nothing was changed.
+
+    Attributes:
+        service: the refused request (``subscribe``, ``unsubscribe``, ``detach``).
+    """
+
+    def __init__(self, service: str) -> None:
+        self.service = service
+        super().__init__(
+            f"{service}: that stream belongs to another client, which alone may subscribe, "
+            "unsubscribe or detach on it; attach a stream of your own (nothing was changed)"
+        )
+
+
 @dataclass(eq=False)
 class ActiveSubscription:
     """One topic a stream receives.
@@ -54,6 +80,8 @@ class Stream:
     Attributes:
         peer: the ROUTER routing id of the client's stream socket.
         token: the name the client uses for it in requests.
+        owner: the routing id of the client's request connection, named by the key the
+            stream attached with (None: none); only it and the stream socket act on it.
         subscriptions: by key.
         held: a frame ZeroMQ refused (the client is slow), sent before any other.
         closed: dropped by the server; late results for it are undone.
@@ -61,6 +89,7 @@ class Stream:
 
     peer: bytes
     token: str
+    owner: bytes | None = None
     subscriptions: dict[int, ActiveSubscription] = field(default_factory=dict)
     held: bytes | None = None
     closed: bool = False
@@ -108,6 +137,9 @@ class StreamHub:
         self._outbox = outbox
         self._by_peer: dict[bytes, Stream] = {}
         self._by_token: dict[str, Stream] = {}
+        #: Keys naming request connections (handed out by ``hello``), both ways.
+        self._key_of: dict[bytes, str] = {}
+        self._peer_of: dict[str, bytes] = {}
 
     @property
     def streams(self) -> tuple[Stream, ...]:
@@ -117,35 +149,83 @@ class StreamHub:
     def subscription_count(self) -> int:
         return sum(len(s.subscriptions) for s in self.streams)
 
-    def attach(self, peer: bytes) -> Stream:
-        """The stream of ``peer`` (created on first use)."""
+    def connection_key(self, peer: bytes) -> str:
+        """The key naming the request connection ``peer`` (made on first use), which its
+        client's stream socket attaches with to make the stream theirs."""
+        key = self._key_of.get(peer)
+        if key is None:
+            key = self._key_of[peer] = os.urandom(16).hex()
+            self._peer_of[key] = peer
+        return key
+
+    def forget_connection(self, peer: bytes) -> None:
+        """``peer`` has disconnected: its key names nobody any more."""
+        key = self._key_of.pop(peer, None)
+        if key is not None:
+            del self._peer_of[key]
+
+    def attach(self, peer: bytes, owner_key: str | None = None) -> Stream:
+        """The stream of ``peer`` (created on first use), owned by the request connection
+        ``owner_key`` names (see :meth:`connection_key`), if any.
+
+        Raises:
+            ProtocolError: ``owner_key`` names no connection of this world.
+        """
+        owner = None
+        if owner_key is not None:
+            owner = self._peer_of.get(owner_key)
+            if owner is None:
+                raise ProtocolError(
+                    "attach: 'owner' names no connection of this world; give the key that "
+                    "'hello' returned ('connection') on this client's request connection"
+                )
         stream = self._by_peer.get(peer)
         if stream is not None:
+            if owner is not None and stream.owner not in (None, owner):
+                raise StreamNotYours("attach")
+            stream.owner = stream.owner or owner
             return stream
         if len(self._by_peer) >= MAX_STREAMS:
             raise ArmfleetError(f"this world serves {MAX_STREAMS} streams already; try later")
-        stream = Stream(peer, os.urandom(8).hex())
+        stream = Stream(peer, os.urandom(8).hex(), owner)
         self._by_peer[peer] = stream
         self._by_token[stream.token] = stream
         return stream
 
-    def stream(self, token: str, service: str) -> Stream:
+    def stream(self, token: str, service: str, peer: bytes) -> Stream:
+        """The stream named ``token``, for a request of ``peer``.
+
+        Raises:
+            ProtocolError: no such stream.
+            StreamNotYours: ``peer`` is neither the stream's socket nor its owner.
+        """
         found = self._by_token.get(token)
         if found is None:
             raise ProtocolError(f"{service}: no stream {token!r}; attach a stream first")
+        if peer not in (found.peer, found.owner):
+            raise StreamNotYours(service)
         return found
 
     def detach(self, peer: bytes, token: str | None) -> None:
-        stream = self._by_peer.get(peer) or self._by_token.get(token or "")
+        """Drop the stream of ``peer`` (its stream socket), else the one named ``token``.
+
+        Raises:
+            StreamNotYours: ``token`` names another client's stream.
+        """
+        stream = self._by_peer.get(peer)
+        if stream is None and token:
+            stream = self._by_token.get(token)
+            if stream is not None:
+                stream = self.stream(token, "detach", peer)
         if stream is not None:
             self.drop(stream, None)
 
     def prepare_subscription(
-        self, args: Arguments
+        self, peer: bytes, args: Arguments
     ) -> tuple[str, SubscriptionQueue, Callable[[Any], dict[str, Any]]]:
         """Check a subscribe request; return its topic, its queue, and what to do once the
         stepping thread has subscribed the queue (register it, or undo if the stream left)."""
-        stream = self.stream(args.text("stream"), "subscribe")
+        stream = self.stream(args.text("stream"), "subscribe", peer)
         topic = args.text("topic")
         key = args.integer("sub", low=0, high=2**63)
         rate = args.number("rate_hz", None, low=1e-3, high=1e6)
@@ -169,8 +249,8 @@ class StreamHub:
 
         return topic, queue, register
 
-    def unsubscribe(self, args: Arguments) -> None:
-        stream = self.stream(args.text("stream"), "unsubscribe")
+    def unsubscribe(self, peer: bytes, args: Arguments) -> None:
+        stream = self.stream(args.text("stream"), "unsubscribe", peer)
         subscription = stream.subscriptions.pop(args.integer("sub", low=0, high=2**63), None)
         if subscription is not None:
             self._cancel(subscription)

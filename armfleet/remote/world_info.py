@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 
@@ -21,6 +21,8 @@ class WorldInfo:
         pid: process of the world.
         streams: clients receiving topics.
         subscriptions: their subscriptions.
+        quotas: what each client, and all clients together, may add, as the world's owner
+            set it (the fields of :class:`~armfleet.remote.ClientQuotas`).
     """
 
     time_s: float
@@ -33,6 +35,7 @@ class WorldInfo:
     pid: int
     streams: int
     subscriptions: int
+    quotas: dict[str, int] = field(default_factory=dict)
 
     @classmethod
     def from_wire(cls, data: dict[str, Any]) -> WorldInfo:
@@ -48,6 +51,7 @@ class WorldInfo:
             pid=int(data["pid"]),
             streams=int(data.get("streams", 0)),
             subscriptions=int(data.get("subscriptions", 0)),
+            quotas={str(key): int(value) for key, value in data.get("quotas", {}).items()},
         )
 
 

@@ -17,7 +17,9 @@ is compared with its target. From home a motion takes 0.7-2.0 s (median 1.4 s; t
 farthest joint moves up to 3.6 rad).
 
 Physical failures are outcomes, not errors: IK that does not converge (the target is not
-sent), and protective stops (a neighbour, the arm itself or the floor touched on the
+sent), a goal refused because the arm would touch itself at IK's solution or on the way
+there (not sent: a redundant arm's solution need not be the drawn, clear configuration),
+and protective stops (a neighbour, the arm itself or the floor touched on the
 way). An arm in protective stop stays there: its later targets are not sent (no reset).
 
 The arms are Pandas unless ``model`` names another: a shipped model, one's own by name, or
@@ -39,6 +41,7 @@ from armfleet.errors import (
     ArmfleetError,
     InvalidNumber,
     ProtectiveStopError,
+    SelfContactError,
     UnreachablePose,
 )
 from armfleet.scenarios.reach_targets import Target, draw_row_targets, pose_error
@@ -79,6 +82,8 @@ class ReachOutcome:
     Attributes:
         results: per target, in rounds, arm by arm within a round.
         ik_failures: goals not sent because IK did not converge.
+        self_contact_refusals: goals not sent because the arm would touch itself at IK's
+            solution or on the way (:class:`~armfleet.errors.SelfContactError`).
         stops: protective stops during the rounds.
         max_tracking_error_rad: largest ``|q_ref - q|`` of the position controllers
             during the rounds (:mod:`~armfleet.scenarios.tracking_monitor`) [rad].
@@ -86,6 +91,7 @@ class ReachOutcome:
 
     results: tuple[TargetResult, ...]
     ik_failures: int
+    self_contact_refusals: int
     stops: int
     max_tracking_error_rad: float
 
@@ -98,6 +104,7 @@ class ReachOutcome:
             "targets": len(self.results),
             "reached_fraction": reached / len(self.results) if self.results else math.nan,
             "ik_failures": self.ik_failures,
+            "self_contact_refusals": self.self_contact_refusals,
             "stops": self.stops,
             "max_tracking_error_rad": self.max_tracking_error_rad,
             "max_position_error_m": max((r.position_error_m for r in self.results), default=0.0),
@@ -139,7 +146,8 @@ def reach(
 
     Returns:
         ``arms`` (int), ``targets`` (int, all arms), ``reached_fraction`` (reached
-        targets / targets), ``ik_failures`` (int), ``stops`` (protective stops, int),
+        targets / targets), ``ik_failures`` (int), ``self_contact_refusals`` (goals
+        refused because the arm would touch itself, int), ``stops`` (protective stops, int),
         ``max_tracking_error_rad`` (largest ``|q_ref - q|`` of any joint of any arm
         after any step of the rounds: the position controller's Ruckig reference against
         the measured position at the same instant) [rad],
@@ -188,7 +196,7 @@ def reach_targets(
         raise ArmfleetError(f"every arm needs as many targets, got {sorted(rounds)}")
     arms = [world.arm(name) for name in targets]
     results: list[TargetResult] = []
-    ik_failures, stops_before = 0, world.safety.stops
+    ik_failures, refusals, stops_before = 0, 0, world.safety.stops
     monitor = TrackingMonitor(arms)
     for index in range(rounds.pop() if rounds else 0):
         sent: dict[str, bool] = {}
@@ -200,6 +208,9 @@ def reach_targets(
             except UnreachablePose:
                 ik_failures += 1
                 sent[arm.name] = False
+            except SelfContactError:
+                refusals += 1
+                sent[arm.name] = False
             except ProtectiveStopError:  # stopped in an earlier round, and left so
                 sent[arm.name] = False
         world.run(max(durations) + settle_s, on_step=monitor.on_step)
@@ -209,7 +220,7 @@ def reach_targets(
             error_m, error_rad = pose_error(tool, target.pose)
             results.append(TargetResult(target, sent[arm.name], error_m, error_rad))
     stops = world.safety.stops - stops_before
-    return ReachOutcome(tuple(results), ik_failures, stops, monitor.max_error_rad)
+    return ReachOutcome(tuple(results), ik_failures, refusals, stops, monitor.max_error_rad)
 
 
 def _whole(value: object, name: str) -> int:

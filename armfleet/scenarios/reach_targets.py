@@ -188,19 +188,26 @@ def draw_row_targets(
     *,
     limit_margin: float = 0.1,
     min_tool_height_m: float = 0.1,
+    probe: ClearanceProbe | None = None,
 ) -> dict[str, list[Target]]:
     """``count`` targets for each of ``arms`` (in order, by name), drawn with ``rng``.
 
-    The arms must be of one model and stand upright on the floor: they share the first
-    arm's :class:`ClearanceProbe`.
+    The arms must be of one model and stand upright on the floor: they share one
+    :class:`ClearanceProbe`, ``probe`` (kept by a caller that draws often: making one
+    costs ~20 ms) or one made of the first arm for this call.
     """
     if not arms:
         return {}
-    with ClearanceProbe(arms[0]) as probe:
-        return {
-            arm.name: draw_targets(
-                arm, rng, count, limit_margin=limit_margin,
-                min_tool_height_m=min_tool_height_m, probe=probe,
-            )
-            for arm in arms
-        }  # fmt: skip
+    if probe is None:
+        with ClearanceProbe(arms[0]) as own:
+            return draw_row_targets(
+                arms, rng, count, limit_margin=limit_margin,
+                min_tool_height_m=min_tool_height_m, probe=own,
+            )  # fmt: skip
+    return {
+        arm.name: draw_targets(
+            arm, rng, count, limit_margin=limit_margin,
+            min_tool_height_m=min_tool_height_m, probe=probe,
+        )
+        for arm in arms
+    }  # fmt: skip

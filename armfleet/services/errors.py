@@ -117,13 +117,15 @@ class TooManyRequests(ArmfleetError):
 
     Attributes:
         limit: requests one client may have in flight.
+        raised_by: who sets the limit, and how (appended to the message).
     """
 
-    def __init__(self, limit: int) -> None:
-        self.limit = limit
+    def __init__(self, limit: int, raised_by: str = "") -> None:
+        self.limit, self.raised_by = limit, raised_by
         super().__init__(
             f"too many requests in flight from this client (limit {limit}); wait for "
-            "replies before sending more (nothing was applied)"
+            f"replies before sending more (nothing was applied{'; ' if raised_by else ''}"
+            f"{raised_by})"
         )
 
 

@@ -25,7 +25,8 @@ from armfleet._version import __version__
 from armfleet.checks.number_ranges import REQUEST_TIMEOUT_S
 
 #: Bumped on any incompatible change; ``hello`` refuses a client speaking another one.
-PROTOCOL_VERSION = 1
+#: 2: a stream answers only to its socket and the request connection it attached for.
+PROTOCOL_VERSION = 2
 #: Largest request the server reads; a larger one gets an error reply [bytes].
 MAX_REQUEST_BYTES = 256 * 1024
 #: Larger frames are cut off by ZeroMQ itself, which drops that connection [bytes].

@@ -44,6 +44,7 @@ from armfleet.messages import (
 from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, MoveOptions
 from armfleet.motion.synchronised_motion import move_together
 from armfleet.objects import ObjectSet, WorldObject, object_spec
+from armfleet.objects.arm_path_clearance import ArmMotion
 from armfleet.objects.object_spec import (
     DEFAULT_COLOR,
     DEFAULT_FRICTION,
@@ -51,6 +52,7 @@ from armfleet.objects.object_spec import (
     DEFAULT_ROLLING_FRICTION_M,
     DEFAULT_SPINNING_FRICTION_M,
 )
+from armfleet.physics.collision_filter import fixed_links
 from armfleet.physics.contact_monitor import ContactMonitor
 from armfleet.physics.ground import create_ground
 from armfleet.physics.joint_memory import JointMemory
@@ -64,6 +66,7 @@ from armfleet.world.bringup import bring_up
 from armfleet.world.front_ends import ViewerHandle, front_end
 from armfleet.world.planned_moves import PlannedMoves
 from armfleet.world.world_listener import WorldListener
+from armfleet.world.world_snapshot import WorldSnapshot
 
 if TYPE_CHECKING:
     from armfleet.spec import FleetSpec
@@ -203,6 +206,11 @@ class World:
             )
         if listener not in self._listeners:
             self._listeners.append(listener)
+
+    @property
+    def listener_count(self) -> int:
+        """Front ends attached (:meth:`attach`)."""
+        return len(self._listeners)
 
     def detach(self, listener: WorldListener) -> None:
         """Stop calling ``listener`` (nothing happens if it is not attached)."""
@@ -601,6 +609,9 @@ class World:
 
         Raises:
             FrameInUse: an arm owns a frame named ``name`` already.
+            ObjectCollision: it would touch an arm, or overlap the floor or an object.
+            ObjectInArmPath: it stands in the remaining path of a moving arm (the arm is
+                named); checked against the arms' references, as planning checks them.
             ArmfleetError: a bad argument or a name in use; the world is unchanged.
         """
         self._check_open()
@@ -623,12 +634,33 @@ class World:
         owner = FrameOwner.object(name)
         self._frames.claim(owner, (name,))
         try:
-            obj = self._objects.add(spec, self.time)
+            obj = self._objects.add(spec, self.time, self._arm_motions())
         except BaseException:
             self._frames.release(owner)
             raise
         self._tell(lambda listener: listener.on_object_added(obj))
         return obj
+
+    def _arm_motions(self) -> list[ArmMotion]:
+        """The moving arms' remaining motions, as the planner reads them."""
+        motions = []
+        for arm in self._arms.values():
+            controller = arm.position_controller
+            if not controller.is_moving or controller.trajectory is None:
+                continue
+            body = arm.body
+            motions.append(
+                ArmMotion(
+                    arm.name,
+                    body.body_id,
+                    [body.joint_indices[i] for i in arm.kinematics.arm_indices],
+                    controller.trajectory.remaining_positions(controller.period),
+                    controller.period,
+                    {body.link_index(link): link for link in body.link_names},
+                    frozenset(fixed_links(body)),
+                )
+            )
+        return motions
 
     @owning
     def remove_object(self, name: str) -> None:
@@ -677,6 +709,19 @@ class World:
         finally:
             self._guard.end_step()
             self._stepping_s += time.perf_counter() - began
+
+    @owning
+    def snapshot(self) -> WorldSnapshot:
+        """The state of the world now, to :meth:`~WorldSnapshot.restore` later, bit for bit
+        (:mod:`armfleet.world.world_snapshot`: what it keeps, and when it refuses).
+
+        Raises:
+            UnsavedState: some state is out of reach (a compiled object of an unknown type).
+        """
+        self._check_open()
+        machinery: tuple[object, ...] = (self._models, self._listeners, self._viewer)
+        machinery += (self._guard, self._planner, self._planned_moves, self._requests)
+        return WorldSnapshot(self, keep=machinery, keep_attributes=("_stepping_s",))
 
     @property
     def stepping_s(self) -> float:
