@@ -80,7 +80,7 @@ def test_a_joint_position_action_brings_the_joints_there() -> None:
     arm = env.world.arm("arm0")
     target = (arm.positions + np.array([0.4, -0.3, 0.3, -0.4, 0.3, 0.4, -0.5])).astype(np.float32)
     assert np.abs(measured_joints(arm) - target).max() > 0.3
-    action = {"arm0": {"joint_positions": target, "gripper": np.zeros(1, np.float32)}}
+    action = {"arm0": {"joint_positions": target}}
     for _ in range(40):  # 2 s
         env.step(action)
     assert np.abs(measured_joints(arm) - target).max() < HOLD_RAD
@@ -94,7 +94,7 @@ def test_joint_deltas_add_up_on_the_previous_target() -> None:
     start = measured_joints(arm)
     delta = np.array([0.05, -0.03, 0.04, 0.05, -0.05, 0.02, 0.05], np.float32)
     for _ in range(10):
-        env.step({"arm0": {"joint_deltas": delta, "gripper": np.zeros(1, np.float32)}})
+        env.step({"arm0": {"joint_deltas": delta}})
     still(env, 60)
     np.testing.assert_allclose(
         measured_joints(arm), start + 10 * delta.astype(float), atol=HOLD_RAD
@@ -125,7 +125,7 @@ def test_a_tool_delta_moves_tool0_by_it_along_the_world_axes() -> None:
 def test_an_unreachable_tool_target_is_not_sent_and_the_episode_goes_on() -> None:
     env = ReachEnv(arm_count=1, action_kind="tool_delta", control_period=20)
     env.reset(seed=0)
-    up = {"arm0": {"tool_delta": np.array([0, 0, 0.02, 0, 0, 0], np.float32), "gripper": [0.0]}}
+    up = {"arm0": {"tool_delta": np.array([0, 0, 0.02, 0, 0, 0], np.float32)}}
     refusals = []
     for _ in range(80):  # 1.6 m up: well out of a Panda's reach
         _, _, terminated, _, info = env.step(up)
@@ -150,7 +150,6 @@ def test_reach_rewards_minus_the_distances_and_succeeds_at_the_targets() -> None
     action = {
         name: {
             "joint_positions": arm.solve_ik(targets[name]).astype(np.float32),
-            "gripper": np.zeros(1, np.float32),
         }
         for name, arm in arms.items()
     }
@@ -162,12 +161,13 @@ def test_reach_rewards_minus_the_distances_and_succeeds_at_the_targets() -> None
             float(np.linalg.norm(tool0_by_pinocchio(arm)[:3, 3] - targets[name][:3, 3]))
             for name, arm in arms.items()
         ]
-        assert abs(float(reward) + sum(distances)) < 1e-6
+        bonus = task.success_bonus if info["success"] else 0.0
+        assert abs(float(reward) + sum(distances) - bonus) < 1e-6
         rewards.append(float(reward))
         if terminated:
             break
     assert terminated and info["success"]
-    assert -rewards[-1] <= 2 * task.tolerance_m
+    assert -(rewards[-1] - task.success_bonus) <= 2 * task.tolerance_m
     assert rewards[0] < rewards[-1]
     env.close()
 
@@ -228,7 +228,7 @@ def test_a_protective_stop_ends_the_episode_or_is_lifted(on_stop: str) -> None:
     arm = env.world.arm("arm0")
     down = arm.positions
     down[1], down[3] = 1.7, -0.1  # leaning far forward: the fingers meet the floor
-    action = {"arm0": {"joint_positions": down.astype(np.float32), "gripper": [0.0]}}
+    action = {"arm0": {"joint_positions": down.astype(np.float32)}}
     for _ in range(60):
         _, _, terminated, _, info = env.step(action)
         if info["stopped"]:
@@ -239,7 +239,7 @@ def test_a_protective_stop_ends_the_episode_or_is_lifted(on_stop: str) -> None:
         assert arm.mode is not armfleet.ArmMode.PROTECTIVE_STOP
         np.testing.assert_allclose(env.commander("arm0").target, arm.positions)  # rebased
         home = np.array(arm.description.home[: len(arm.joint_names)], np.float32)
-        back = {"arm0": {"joint_positions": home, "gripper": [0.0]}}
+        back = {"arm0": {"joint_positions": home}}
         for _ in range(40):
             _, _, terminated, _, info = env.step(back)
         assert not terminated and info["stopped"] == []

@@ -49,6 +49,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from armfleet.controllers.controller import ArmContext, Controller
+from armfleet.controllers.finger_motion import plan_fingers
 from armfleet.controllers.gripper_joints import GripperJoints, gripper_joints
 from armfleet.controllers.gripper_joints import finger_indices as finger_indices  # callers' name
 from armfleet.controllers.jerk_limited_trajectory import JerkLimitedTrajectory
@@ -348,7 +349,8 @@ class GripperController(Controller):
         per_finger = np.clip(
             self._lower + (width - self.min_width) / self._weight_sum, self._lower, self._upper
         )
-        self.trajectory.follow(self.trajectory.plan(per_finger))
+        limits = (self._speed, self._acceleration, self._jerk)
+        self.trajectory.follow(plan_fingers(self.trajectory, per_finger, limits, self.period))
         self._grasping[:] = command.grasp
         self._force[:] = command.force
         self._target_width = width

@@ -3,6 +3,7 @@
 >>> import gymnasium as gym
 >>> import armfleet.envs
 >>> env = gym.make("armfleet/Reach-v0", arm_count=2)
+>>> flat = gym.make("armfleet/Reach-v0", flat=True)  # Box spaces, for Stable-Baselines3
 
 Importing this package registers ``armfleet/Reach-v0``, ``armfleet/Handover-v0`` and
 ``armfleet/Scene-v0`` (any launch spec); ``import armfleet`` alone does not load it (nor
@@ -20,6 +21,7 @@ require_extra("The learning environments", "envs", "gymnasium", "pettingzoo")
 from armfleet.envs.actions import ActionKind, StepLimits
 from armfleet.envs.arm_commander import ArmCommander
 from armfleet.envs.errors import EnvError, EnvNotReset, InvalidAction, InvalidOption
+from armfleet.envs.flat_spaces import FlatSpaces
 from armfleet.envs.multi_arm_env import MultiArmEnv
 from armfleet.envs.parallel_env import MultiArmParallelEnv
 from armfleet.envs.registration import HANDOVER_ID, REACH_ID, SCENE_ID, register_envs
@@ -46,6 +48,7 @@ __all__ = [
     "EnvError",
     "EnvNotReset",
     "Evaluation",
+    "FlatSpaces",
     "HandoverEnv",
     "HandoverTask",
     "InvalidAction",

@@ -1,7 +1,8 @@
 """What an arm's action is (its space) and how one is checked before anything moves.
 
 Each arm's action is a ``Dict``: one arm entry, named after the action kind, and, for an
-arm with fingers, ``"gripper"``. Every entry is a float32 ``Box``:
+arm with fingers in a task that uses them (not Reach), ``"gripper"``. Every entry is a
+float32 ``Box``:
 
 - ``"joint_positions"``: target positions of the arm's joints (``arm.joint_names``),
   bounded by the joint limits [rad];
@@ -77,8 +78,11 @@ class StepLimits:
                 raise InvalidOption(name, value, f"a number in (0, {high}]")
 
 
-def arm_action_space(arm: Arm, kind: ActionKind, limits: StepLimits) -> spaces.Dict:
-    """The action space of ``arm`` for ``kind``."""
+def arm_action_space(
+    arm: Arm, kind: ActionKind, limits: StepLimits, *, gripper: bool = True
+) -> spaces.Dict:
+    """The action space of ``arm`` for ``kind``; with a ``gripper`` entry if the arm has
+    fingers and ``gripper`` is set."""
     count = len(arm.joint_names)
     if kind is ActionKind.JOINT_POSITIONS:
         lower, upper = one_turn_bounds(*arm.joint_limits)  # a continuous joint: one turn
@@ -89,7 +93,7 @@ def arm_action_space(arm: Arm, kind: ActionKind, limits: StepLimits) -> spaces.D
         bound = np.array([limits.tool_m] * 3 + [limits.tool_rad] * 3, dtype=np.float32)
         main = spaces.Box(-bound, bound, dtype=np.float32)
     entries: dict[str, spaces.Space[object]] = {kind.value: main}
-    if arm.has_gripper:
+    if gripper and arm.has_gripper:
         entries[GRIPPER] = spaces.Box(0.0, 1.0, (1,), dtype=np.float32)
     return spaces.Dict(entries)
 

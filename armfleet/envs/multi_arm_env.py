@@ -4,9 +4,12 @@ observations keyed by arm name.
 A step checks every arm's action (:mod:`armfleet.envs.actions`; a bad one is refused
 with nothing applied and no time passed), sends every arm its command
 (:mod:`armfleet.envs.arm_commander`), runs ``control_period`` physics steps, and asks the
-task for the reward. A reset launches the task's scene anew (``armfleet.launch`` with one
-model library for all episodes, ~70 ms for two Pandas and a table set), so that
-``reset(seed=s)`` starts every episode from the same state and draws the same things.
+task for the reward. A reset restores the world as it was launched, from a snapshot taken
+once (:mod:`armfleet.world.world_snapshot`: about 1 ms, against 65-130 ms to launch the
+scene anew), so that ``reset(seed=s)`` starts every episode from the same state, bit for
+bit, and draws the same things. The scene is launched anew only when the snapshot cannot
+serve: the world was changed (an arm or object added or removed, a front end attached), or
+``render_mode="human"`` (every episode on a new world, shown by its viewer).
 """
 
 from __future__ import annotations
@@ -25,23 +28,31 @@ from armfleet.description import ModelLibrary
 from armfleet.envs.actions import ActionKind, StepLimits, arm_action_space, check_action
 from armfleet.envs.arm_commander import ArmCommander
 from armfleet.envs.errors import EnvNotReset, InvalidOption
+from armfleet.envs.flat_spaces import FlatSpaces
 from armfleet.envs.observations import ArmObserver
 from armfleet.envs.rendering import DEFAULT_SIZE, RenderMode, check_size, render_rgb
+from armfleet.envs.stop_messages import StopMessages
+from armfleet.envs.stop_penalty import stop_penalty_for
 from armfleet.envs.stop_policy import StopPolicy
 from armfleet.envs.tasks.task import Evaluation, SceneTask, Task
 from armfleet.messages import ArmMode
 from armfleet.spec import FleetSpec
 from armfleet.world import World
 from armfleet.world.launch import launch
+from armfleet.world.object_state import UnsavedState
+from armfleet.world.world_snapshot import SnapshotStale, WorldSnapshot
 
 logger = logging.getLogger("armfleet")
 
 #: Longest control period [physics steps].
 MAX_CONTROL_PERIOD = 10_000
+#: Episode length of an environment not told one [environment steps]; the longest taken.
+DEFAULT_MAX_EPISODE_STEPS, MAX_EPISODE_STEPS = 1000, 1_000_000
 _STOPPED = (ArmMode.PROTECTIVE_STOP, ArmMode.ERROR)
 
 Observation = dict[str, Any]
-Action = dict[str, Any]
+#: A ``Dict`` action, or with ``flat=True`` an array.
+Action = dict[str, Any] | npt.NDArray[Any]
 
 
 class MultiArmEnv(gym.Env[Observation, Action]):
@@ -62,6 +73,13 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         render_size: (width, height) of ``rgb_array`` images [pixels].
         max_joint_step_rad: bound of ``joint_deltas`` actions [rad].
         max_tool_step_m, max_tool_step_rad: bounds of ``tool_delta`` actions [m, rad].
+        max_episode_steps: the episode is truncated (``truncated=True``) after this many
+            steps, in [1, 1000000].
+        stop_penalty: subtracted from the reward of a step in which an arm stops; by
+            default made from the task's reward bounds so that a stop costs more than
+            any episode that goes on (:mod:`armfleet.envs.stop_penalty`).
+        flat: actions and observations as flat float32 ``Box``es, actions in [-1, 1]
+            (:mod:`armfleet.envs.flat_spaces`: what Stable-Baselines3 takes).
 
     Raises:
         InvalidOption: an option out of its choices (the message lists them).
@@ -82,6 +100,9 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         max_joint_step_rad: float = 0.05,
         max_tool_step_m: float = 0.02,
         max_tool_step_rad: float = 0.1,
+        max_episode_steps: int = DEFAULT_MAX_EPISODE_STEPS,
+        stop_penalty: float | None = None,
+        flat: bool = False,
     ) -> None:
         if isinstance(task, FleetSpec | str | Path):
             task = SceneTask(task)
@@ -97,6 +118,11 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         self.render_mode = None if mode is None else mode.value
         self._render_size = check_size(render_size)
         self._limits = StepLimits(max_joint_step_rad, max_tool_step_m, max_tool_step_rad)
+        self._max_steps = _max_episode_steps(max_episode_steps)
+        self._stop_penalty = stop_penalty_for(task, self._max_steps, stop_penalty)
+        if not isinstance(flat, bool):
+            raise InvalidOption("flat", flat, "True or False")
+        self._elapsed_steps = 0
         spec = task.spec()
         self._spec = dataclasses.replace(
             spec, world=dataclasses.replace(spec.world, viewer=mode is RenderMode.HUMAN)
@@ -109,11 +135,19 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         except BaseException:
             self._world.close()
             raise
-        self.action_space = self._actions
-        self.observation_space = self._observations
+        self._flat = FlatSpaces(self._actions, self._observations) if flat else None
+        self._stop_messages = StopMessages(self._observers)
+        if self._flat is None:
+            self.action_space: spaces.Space[Any] = self._actions
+            self.observation_space: spaces.Space[Any] = self._observations
+        else:
+            self.action_space = self._flat.action_space
+            self.observation_space = self._flat.observation_space
         rate = {"render_fps": 1.0 / (self._world.dt * self._period)}  # this env's own
         self.metadata = {**self.metadata, **rate}
         self._fresh = True  # the world is as launched: the first reset takes it
+        #: The world as launched, restored by every reset (None: each reset launches anew).
+        self._start: WorldSnapshot | None = self._save_start()
         self._commanders: dict[str, ArmCommander] = {}
 
     # -- what it is ----------------------------------------------------------------------
@@ -123,7 +157,9 @@ class MultiArmEnv(gym.Env[Observation, Action]):
 
     @property
     def world(self) -> World:
-        """The current episode's world (for inspection; a new one after every reset)."""
+        """The current episode's world (for inspection): the same one from episode to
+        episode, restored by every reset, unless a reset had to launch it anew (the
+        module docstring says when)."""
         return self._world
 
     @property
@@ -152,6 +188,21 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         """The observation space of ``arm`` (the entry of :attr:`observation_space`)."""
         return _entry(self._observations, arm)
 
+    @property
+    def max_episode_steps(self) -> int:
+        """Steps after which an episode is truncated."""
+        return self._max_steps
+
+    @property
+    def stop_penalty(self) -> float:
+        """Subtracted from the reward of a step in which an arm stops."""
+        return self._stop_penalty
+
+    @property
+    def flat_spaces(self) -> FlatSpaces | None:
+        """The flat form of the spaces (``flat=True``), else None."""
+        return self._flat
+
     def commander(self, arm: str) -> ArmCommander:
         """The command state of ``arm`` this episode (its targets)."""
         if arm not in self._commanders:
@@ -162,14 +213,12 @@ class MultiArmEnv(gym.Env[Observation, Action]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Observation, dict[str, Any]]:
-        """Start an episode from the task's scene, launched anew; the task draws its
-        targets with the environment's generator (seeded by ``seed``). ``options`` are
-        not used."""
+        """Start an episode from the task's scene as launched (restored from its snapshot,
+        or launched anew: see the module docstring); the task draws its targets with the
+        environment's generator (seeded by ``seed``). ``options`` are not used."""
         super().reset(seed=seed, options=options)
-        if not self._fresh:
-            self._world.close()
-            self._world = self._launch()
-        self._fresh = False
+        self._elapsed_steps = 0
+        self._restart_world()
         self._task.reset(self._world, self.np_random)
         self._commanders = {
             name: ArmCommander(self._world, self._world.arm(name), self._kind)
@@ -181,6 +230,9 @@ class MultiArmEnv(gym.Env[Observation, Action]):
     def step(self, action: Action) -> tuple[Observation, SupportsFloat, bool, bool, dict[str, Any]]:
         """Apply every arm's action, run ``control_period`` physics steps, evaluate.
 
+        The reward is the task's, minus :attr:`stop_penalty` if an arm stopped;
+        ``truncated`` once :attr:`max_episode_steps` steps are done.
+
         Raises:
             InvalidAction: a missing or unknown arm or entry, a wrong shape, a value
                 that is not finite; nothing was applied and no time passed.
@@ -188,26 +240,33 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         """
         if not self._commanders:
             raise EnvNotReset("step")
+        if self._flat is not None:
+            action = self._flat.action(action)
         checked, clipped = check_action(self._actions, action)
         refused = {}
-        for name, commander in self._commanders.items():
-            reason = commander.apply(checked[name])
-            if reason:
-                refused[name] = reason
         world = self._world
-        for _ in range(self._period):
-            world.step()
+        with self._stop_messages.taking() as stop_reasons:
+            for name, commander in self._commanders.items():
+                reason = commander.apply(checked[name])
+                if reason:
+                    refused[name] = reason
+            for _ in range(self._period):
+                world.step()
+        self._elapsed_steps += 1
         evaluation = self._task.evaluate(world)
         stopped = [name for name, arm in world.arms.items() if arm.mode in _STOPPED]
         terminated = (evaluation.success and self._task.terminate_on_success) or bool(
             stopped and self._stop_policy is StopPolicy.TERMINATE
         )
+        truncated = not terminated and self._elapsed_steps >= self._max_steps
+        reward = float(evaluation.reward) - (self._stop_penalty if stopped else 0.0)
         if stopped and self._stop_policy is StopPolicy.RESET:
             for name in stopped:
                 world.arm(name).reset()
                 self._commanders[name].rebase()
         info = self._info(evaluation, stopped, refused, clipped)
-        return self._observe(), float(evaluation.reward), terminated, False, info
+        info["stop_reasons"] = dict(stop_reasons)
+        return self._observe(), reward, terminated, truncated, info
 
     def render(self) -> npt.NDArray[np.uint8] | None:
         """An RGB image (``rgb_array``); None for ``human`` (the viewer follows the
@@ -229,15 +288,49 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         if not arms:
             raise InvalidOption("task", task.name, "a scene with at least one arm")
         objects = list(self._world.objects)
+        gripper = task.uses_gripper
         self._observers = {
-            arm.name: ArmObserver(arm, objects, task.arm_spaces(arm.name)) for arm in arms
+            arm.name: ArmObserver(arm, objects, task.arm_spaces(arm.name), gripper=gripper)
+            for arm in arms
         }
         self._actions = spaces.Dict(
-            {arm.name: arm_action_space(arm, self._kind, self._limits) for arm in arms}
+            {
+                arm.name: arm_action_space(arm, self._kind, self._limits, gripper=gripper)
+                for arm in arms
+            }
         )
         self._observations = spaces.Dict(
             {name: observer.space for name, observer in self._observers.items()}
         )
+
+    def _restart_world(self) -> None:
+        """The world as launched: the snapshot restored, else a world launched anew (and
+        its snapshot restored at once, so that its solvers start as every restore's)."""
+        fresh, self._fresh = self._fresh, False
+        if self._start is not None:
+            try:
+                self._start.restore()
+                return
+            except SnapshotStale as exc:
+                logger.debug("launching the scene anew: %s", exc)
+        if fresh and self._start is None:
+            return  # no snapshot: the world just launched is the first episode's
+        self._world.close()
+        self._world = self._launch()
+        self._start = self._save_start()
+        if self._start is not None:
+            self._start.restore()
+
+    def _save_start(self) -> WorldSnapshot | None:
+        """A snapshot of the world just launched; None with a viewer (each episode a new
+        world on screen), or if some state is out of the snapshot's reach."""
+        if self._spec.world.viewer:
+            return None
+        try:
+            return self._world.snapshot()
+        except UnsavedState as exc:
+            logger.warning("every reset launches the scene anew: %s", exc)
+            return None
 
     def _launch(self) -> World:
         # Every episode's viewer on the first one's port: the page stays where it is.
@@ -252,8 +345,19 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         return world
 
     def _observe(self) -> Observation:
+        """The observation: a ``Dict``'s value, or its flat form (``flat=True``)."""
+        observation = self.dict_observation()
+        if self._flat is None:
+            return observation
+        flat: Observation = self._flat.observation(observation)  # type: ignore[assignment]
+        return flat
+
+    def dict_observation(self) -> dict[str, Any]:
+        """The observation as a ``Dict`` value (as without ``flat``), now."""
         return {
-            name: observer.observe(self._world, self._task.observe(self._world, name))
+            name: observer.observe(
+                self._world, self.commander(name).target, self._task.observe(self._world, name)
+            )
             for name, observer in self._observers.items()
         }
 
@@ -269,6 +373,7 @@ class MultiArmEnv(gym.Env[Observation, Action]):
             "stopped": stopped,
             "refused": refused,
             "clipped": clipped,
+            "stop_reasons": {},
             "time_s": self._world.time,
             **evaluation.info,
         }
@@ -297,4 +402,13 @@ def _control_period(value: object) -> int:
         raise InvalidOption("control_period", value, valid)
     if not 1 <= value <= MAX_CONTROL_PERIOD:
         raise InvalidOption("control_period", value, valid)
+    return int(value)
+
+
+def _max_episode_steps(value: object) -> int:
+    valid = f"a whole number of steps in [1, {MAX_EPISODE_STEPS}]"
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise InvalidOption("max_episode_steps", value, valid)
+    if not 1 <= value <= MAX_EPISODE_STEPS:
+        raise InvalidOption("max_episode_steps", value, valid)
     return int(value)

@@ -6,8 +6,12 @@ Per arm (a ``Dict``):
 - ``joint_positions`` [rad]: bounded by the joint limits widened by
   :data:`JOINT_MARGIN_RAD` (an impact can push a joint a little past its limit);
 - ``joint_velocities`` [rad/s]: bounded by :data:`VELOCITY_FACTOR` times the URDF limits;
+- ``joint_targets`` [rad]: where the arm is being sent (the commander's joint target:
+  deltas add to it, and a zero action keeps the arm going there), bounded by the joint
+  limits. Without it the state is not observed: a jerk-limited motion lags its target
+  by up to ~10 steps of the largest deltas;
 - ``tool_pose``: tool0 in the world, (x, y, z, qx, qy, qz, qw) [m], qw >= 0;
-- ``gripper_width`` [m] (arms with fingers): the measured opening;
+- ``gripper_width`` [m] (arms with fingers, in tasks that use them): the measured opening;
 - ``objects`` (worlds with objects): a ``Dict`` of each object's pose, as ``tool_pose``;
 - the task's entries (Reach: ``target_pose``).
 """
@@ -47,10 +51,16 @@ class ArmObserver:
         arm: the arm (of the world the space is made from; only its model is kept).
         objects: names of the scene's objects.
         task_entries: the task's entries for this arm, by name.
+        gripper: observe the gripper's width (if the arm has fingers).
     """
 
     def __init__(
-        self, arm: Arm, objects: list[str], task_entries: Mapping[str, spaces.Box]
+        self,
+        arm: Arm,
+        objects: list[str],
+        task_entries: Mapping[str, spaces.Box],
+        *,
+        gripper: bool = True,
     ) -> None:
         self.name = arm.name
         lower, upper = arm.joint_limits
@@ -58,10 +68,11 @@ class ArmObserver:
         entries: dict[str, spaces.Space[object]] = {
             "joint_positions": _box(lower - JOINT_MARGIN_RAD, upper + JOINT_MARGIN_RAD),
             "joint_velocities": _box(-velocity, velocity),
+            "joint_targets": _box(lower, upper),
             "tool_pose": pose_space(),
         }
-        self._has_gripper = arm.has_gripper
-        if arm.has_gripper:
+        self._has_gripper = gripper and arm.has_gripper
+        if self._has_gripper:
             entries["gripper_width"] = _box([0.0], [arm.gripper.max_width * WIDTH_FACTOR])
         self._objects = list(objects)
         if objects:
@@ -69,13 +80,17 @@ class ArmObserver:
         entries.update(task_entries)
         self.space = spaces.Dict(entries)
 
-    def observe(self, world: World, task_values: Mapping[str, FloatArray]) -> dict[str, object]:
-        """This arm's observation in ``world``, with the task's values for it."""
+    def observe(
+        self, world: World, target: FloatArray, task_values: Mapping[str, FloatArray]
+    ) -> dict[str, object]:
+        """This arm's observation in ``world``, with its joint ``target`` [rad] and the
+        task's values for it."""
         arm = world.arm(self.name)
         indices = arm.kinematics.arm_indices
         values: dict[str, object] = {
             "joint_positions": arm.body.position[indices],
             "joint_velocities": arm.body.velocity[indices],
+            "joint_targets": target,
             "tool_pose": pose_vector(world.tf.world_pose(arm.description.tool0)),
         }
         if self._has_gripper:

@@ -48,7 +48,11 @@ class MultiArmParallelEnv(ParallelEnv[str, AgentObservation, AgentAction]):  # t
     ) -> None:
         if isinstance(max_cycles, bool) or not isinstance(max_cycles, int) or max_cycles < 1:
             raise InvalidOption("max_cycles", max_cycles, "a whole number >= 1")
-        self._env = MultiArmEnv(task, **options)
+        for option in ("flat", "max_episode_steps"):
+            if option in options:
+                valid = "a MultiArmEnv option; agents have Dict spaces, max_cycles ends episodes"
+                raise InvalidOption(option, options[option], valid)
+        self._env = MultiArmEnv(task, max_episode_steps=max_cycles, **options)
         #: Every arm's observation in one float32 vector (``state()``), e.g. for a
         #: centralised critic: Gymnasium's ``flatten_space`` of the whole ``Dict``.
         self.state_space = spaces.flatten_space(self._env.observation_space)

@@ -9,8 +9,9 @@ from typing import Any
 
 from armfleet.envs.actions import ActionKind
 from armfleet.envs.multi_arm_env import MultiArmEnv
+from armfleet.envs.registration import HANDOVER_MAX_STEPS, REACH_MAX_STEPS, SCENE_MAX_STEPS
 from armfleet.envs.tasks.handover_task import HandoverTask, RewardKind
-from armfleet.envs.tasks.reach_task import ReachTask
+from armfleet.envs.tasks.reach_task import SUCCESS_BONUS, ReachTask
 from armfleet.envs.tasks.task import SceneTask
 from armfleet.scenarios.handover import TOLERANCE_M
 from armfleet.scenarios.reach import MODEL
@@ -23,21 +24,25 @@ class ReachEnv(MultiArmEnv):
     default.
 
     Args:
-        arm_count, spacing_m, tolerance_m, model: of the task (``model``: a shipped
-            model, one's own by name, or a model file).
+        arm_count, spacing_m, tolerance_m, model, success_bonus: of the task
+            (``model``: a shipped model, one's own by name, or a model file).
         **options: of :class:`MultiArmEnv`.
     """
 
     def __init__(
         self,
-        arm_count: int = 2,
+        arm_count: int = 1,
         spacing_m: float = 1.0,
         tolerance_m: float = 0.02,
         model: str | os.PathLike[str] = MODEL,
+        success_bonus: float = SUCCESS_BONUS,
         **options: Any,
     ) -> None:
         options.setdefault("action_kind", ActionKind.JOINT_DELTAS)
-        task = ReachTask(arm_count, spacing_m, tolerance_m, model=model)
+        options.setdefault("max_episode_steps", REACH_MAX_STEPS)
+        task = ReachTask(
+            arm_count, spacing_m, tolerance_m, model=model, success_bonus=success_bonus
+        )
         super().__init__(task, **options)
 
 
@@ -60,6 +65,7 @@ class HandoverEnv(MultiArmEnv):
         **options: Any,
     ) -> None:
         options.setdefault("action_kind", ActionKind.TOOL_DELTA)
+        options.setdefault("max_episode_steps", HANDOVER_MAX_STEPS)
         super().__init__(HandoverTask(reward, tolerance_m, spec), **options)
 
 
@@ -73,4 +79,5 @@ class SceneEnv(MultiArmEnv):
     """
 
     def __init__(self, spec: FleetSpec | str | Path = "bob_and_toby", **options: Any) -> None:
+        options.setdefault("max_episode_steps", SCENE_MAX_STEPS)
         super().__init__(SceneTask(spec), **options)

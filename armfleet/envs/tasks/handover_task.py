@@ -11,7 +11,8 @@ centre lifted by half the mat and half the bar, moving slower than
 - sparse: 1 on success, else 0;
 - dense: ``-d_goal - 0.5 d_reach + 0.1 held`` with ``d_goal`` the bar centre's distance to
   the goal [m], ``d_reach`` the distance from the nearer tcp (between the finger pads) to
-  the bar's centre [m], ``held`` 1 while a gripper holds something. Moving the bar
+  the bar's centre [m], each capped at :data:`DISTANCE_CAP_M` (a step's reward is then
+  bounded), ``held`` 1 while a gripper holds something. Moving the bar
   straight towards the goal by ``s`` raises it by at least ``0.5 s``, whatever the arms do
   (``d_reach`` changes by at most ``s``).
 """
@@ -41,6 +42,8 @@ BAR_SHIFT_M, BAR_TURN_DEG = 0.02, 10.0
 RESTING_SPEED_M_S = 0.01
 #: Weights of the dense reward's reach and hold terms.
 REACH_WEIGHT, HOLD_BONUS = 0.5, 0.1
+#: The dense reward's distances are capped here [m] (the scene is ~1.5 m across).
+DISTANCE_CAP_M = 3.0
 
 
 class RewardKind(enum.Enum):
@@ -120,6 +123,15 @@ class HandoverTask(Task):
         if self.reward is RewardKind.SPARSE:
             reward = float(success)
         else:
-            reward = -to_goal - REACH_WEIGHT * reach + HOLD_BONUS * held
+            reward = (
+                -min(to_goal, DISTANCE_CAP_M)
+                - REACH_WEIGHT * min(reach, DISTANCE_CAP_M)
+                + HOLD_BONUS * held
+            )
         info: dict[str, object] = {"bar_to_goal_m": to_goal, "tcp_to_bar_m": reach, "held": held}
         return Evaluation(reward, success, info)
+
+    def reward_bounds(self) -> tuple[float, float]:
+        if self.reward is RewardKind.SPARSE:
+            return (0.0, 1.0)
+        return (-(1.0 + REACH_WEIGHT) * DISTANCE_CAP_M, HOLD_BONUS)

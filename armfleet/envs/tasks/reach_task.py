@@ -5,8 +5,11 @@ Pandas ``arm0``, ``arm1``, ... along x, ``spacing_m`` apart, facing +y. At reset
 gets one target drawn with the episode's generator
 (:func:`~armfleet.scenarios.reach_targets.draw_row_targets`: the tool0 pose of a
 random joint configuration clear of the limits, the floor and the arm itself).
-Reward: minus the sum over arms of tool0's distance to its target's position [m] (dense);
-success once every tool0 is within ``tolerance_m`` of its target's position.
+Reward, every step: minus the sum over arms of tool0's distance to its target's position
+[m], each capped at :data:`DISTANCE_CAP_M` (so that a step's reward is bounded), plus
+``success_bonus`` in the step that succeeds: once every tool0 is within ``tolerance_m``
+of its target's position. The arms have no gripper action (nor observed width): reaching
+needs none, and random finger commands only add noise to learn through.
 ``model`` makes the row of another arm: a shipped model, one's own by name, or a model
 file (docs/own-robot.md), all its joints driven as a Panda's.
 """
@@ -14,6 +17,7 @@ file (docs/own-robot.md), all its joints driven as a Panda's.
 from __future__ import annotations
 
 import os
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -28,13 +32,18 @@ from armfleet.envs.tasks.task import Evaluation, Task
 from armfleet.frames.spawn_pose import SpawnPose
 from armfleet.messages import FloatArray
 from armfleet.scenarios.reach import FACING_DEG, MODEL
-from armfleet.scenarios.reach_targets import draw_row_targets
+from armfleet.scenarios.reach_targets import ClearanceProbe, draw_row_targets
 from armfleet.spec import FleetSpec
 from armfleet.spec.fleet_spec import ArmSpec, WorldSpec
 from armfleet.world import World
 
 #: Arms a Reach environment takes.
 MAX_ARMS = 8
+#: Each arm's distance term of the reward is capped here [m] (a Panda's tool0 and target
+#: are never this far apart: both lie within its ~0.9 m reach of the shoulder).
+DISTANCE_CAP_M = 2.0
+#: Added to the reward in the step that succeeds.
+SUCCESS_BONUS = 1.0
 
 
 class ReachTask(Task):
@@ -50,16 +59,20 @@ class ReachTask(Task):
             or a model file's path (made absolute here: episodes and vector workers read
             the same file) or ``package://`` URI. An unknown model or a bad file is refused
             when the environment is made.
+        success_bonus: added to the reward in the step that succeeds, in [0, 100].
     """
+
+    uses_gripper = False
 
     def __init__(
         self,
-        arm_count: int = 2,
+        arm_count: int = 1,
         spacing_m: float = 1.0,
         tolerance_m: float = 0.02,
         limit_margin: float = 0.1,
         min_tool_height_m: float = 0.1,
         model: str | os.PathLike[str] = MODEL,
+        success_bonus: float = SUCCESS_BONUS,
     ) -> None:
         if isinstance(arm_count, bool) or not isinstance(arm_count, int | np.integer):
             raise InvalidOption("arm_count", arm_count, f"a whole number in [1, {MAX_ARMS}]")
@@ -72,11 +85,16 @@ class ReachTask(Task):
         self.tolerance_m = real_number(
             tolerance_m, "tolerance_m", "a distance in (0, 0.5] m", low=1e-6, high=0.5
         )
+        self.success_bonus = real_number(
+            success_bonus, "success_bonus", "a number in [0, 100]", low=0.0, high=100.0
+        )
         self.limit_margin = limit_margin
         self.min_tool_height_m = min_tool_height_m
         self.arms = tuple(f"arm{i}" for i in range(self.arm_count))
         self.model = _model_reference(model)
         self._targets: dict[str, FloatArray] = {}
+        #: Whether a configuration touches the arm or the floor (PyBullet client of its own).
+        self._probe: ClearanceProbe | None = None
 
     @property
     def name(self) -> str:
@@ -96,9 +114,13 @@ class ReachTask(Task):
 
     def reset(self, world: World, rng: np.random.Generator) -> None:
         arms = [world.arm(name) for name in self.arms]
+        if self._probe is None:  # one for every episode: making one costs ~20 ms
+            self._probe = ClearanceProbe(arms[0])
+            weakref.finalize(self, self._probe.close)
         drawn = draw_row_targets(
-            arms, rng, 1, limit_margin=self.limit_margin, min_tool_height_m=self.min_tool_height_m
-        )
+            arms, rng, 1, limit_margin=self.limit_margin,
+            min_tool_height_m=self.min_tool_height_m, probe=self._probe,
+        )  # fmt: skip
         self._targets = {name: targets[0].pose for name, targets in drawn.items()}
 
     def arm_spaces(self, arm: str) -> dict[str, spaces.Box]:
@@ -123,7 +145,13 @@ class ReachTask(Task):
     def evaluate(self, world: World) -> Evaluation:
         distances = self.distances(world)
         success = all(d <= self.tolerance_m for d in distances.values())
-        return Evaluation(-sum(distances.values()), success, {"distance_m": distances})
+        reward = -sum(min(d, DISTANCE_CAP_M) for d in distances.values())
+        if success:
+            reward += self.success_bonus
+        return Evaluation(reward, success, {"distance_m": distances})
+
+    def reward_bounds(self) -> tuple[float, float]:
+        return (-DISTANCE_CAP_M * self.arm_count, self.success_bonus)
 
 
 def _model_reference(model: object) -> str:

@@ -37,9 +37,12 @@ class Task(ABC):
     Attributes:
         terminate_on_success: end the episode (``terminated``) once :meth:`evaluate`
             reports success.
+        uses_gripper: whether the arms' actions have a ``gripper`` entry (and their
+            observations a ``gripper_width``), for arms with fingers.
     """
 
     terminate_on_success: bool = True
+    uses_gripper: bool = True
 
     @property
     @abstractmethod
@@ -70,6 +73,13 @@ class Task(ABC):
     def evaluate(self, world: World) -> Evaluation:
         """The reward and success after a step (and after reset, for ``info``)."""
 
+    def reward_bounds(self) -> tuple[float, float] | None:
+        """The lowest and highest reward :meth:`evaluate` gives in one step, or None if
+        unknown. The environment's stop penalty is made from them (a stop then costs
+        more than any episode that goes on: docs/envs.md); None by default (no penalty
+        unless the environment is given one)."""
+        return None
+
 
 class SceneTask(Task):
     """Any launch spec, no goal: reward 0, never a success (an environment to drive,
@@ -97,3 +107,6 @@ class SceneTask(Task):
     def evaluate(self, world: World) -> Evaluation:
         del world
         return Evaluation(0.0, False)
+
+    def reward_bounds(self) -> tuple[float, float]:
+        return (0.0, 0.0)
