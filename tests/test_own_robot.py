@@ -490,3 +490,33 @@ def test_every_hard_part_together_by_path_with_an_end_effector(
         left = state[names.index("bob_l_finger_joint")]
         right = state[names.index("bob_r_finger_joint")]
         assert abs(left - right) < 1e-4  # the mimic follows its leader
+
+
+def test_the_planners_shapes_are_pybullets_size_for_a_collada_unit(
+    workspace: Path, hard_parts: Path
+) -> None:
+    """The base's COLLADA cube is in centimetres: PyBullet applies the unit, coal's mesh
+    loader does not (it loaded the cube 100 times too large, so every link was "inside"
+    the base for the planner and for move_to's self-contact proof)."""
+    import coal
+    import pinocchio as pin
+
+    from armfleet.planning.scene import arm_geometry
+
+    with armfleet.World(models=ModelLibrary(package_paths=[workspace])) as world:
+        bob = world.spawn("bob", model=str(hard_parts), at=(0, 0))
+        low, high = p.getAABB(bob.body.body_id, -1, physicsClientId=world.physics_client)
+        geometry = arm_geometry(
+            "bob", bob.description.urdf, bob.kinematics.model, bob.joint_names, (), ()
+        ).geometry
+        base = next(g for g in geometry.geometryObjects if g.meshPath.endswith("cube.dae"))
+        shape = base.geometry
+        shape.computeLocalAABB()
+        size = np.asarray(shape.aabb_local.max_) - np.asarray(shape.aabb_local.min_)
+        assert isinstance(shape, coal.CollisionGeometry) and isinstance(base, pin.GeometryObject)
+        # 1 cm units scaled 20 x 20 x 10; PyBullet's box is that grown by its margins.
+        assert size == pytest.approx((0.2, 0.2, 0.1), abs=1e-9)
+        assert np.subtract(high, low) - size == pytest.approx((0.0, 0.0, 0.0), abs=5e-3)
+        target = np.asarray(bob.positions)
+        target[0] = 1.0
+        bob.move_to(target)  # refused as touching itself while the cube was 20 m wide

@@ -491,13 +491,16 @@ def test_a_plain_move_to_takes_over_a_planned_motion_smoothly() -> None:
 
 def box_on_the_path(world: armfleet.World, fraction: float) -> None:
     """A static 12 cm box where bob's tool0 will be ``fraction`` of the way along his
-    current motion (from the reference he follows)."""
+    current motion (from the reference he follows). ``add_object`` refuses a box in a
+    moving arm's path, so it is added out of reach and teleported there (``set_pose``
+    checks where the arms are, not where they go)."""
     bob = world.arm("bob")
     trajectory = bob.position_controller.trajectory
     assert trajectory is not None
     rows = trajectory.remaining_positions(bob.position_controller.period)
     ahead = tool_position(bob, rows[int(fraction * (len(rows) - 1))])
-    world.add_object("obstacle", "box", size=(0.12, 0.12, 0.12), at=tuple(ahead), mass=0.0)
+    box = world.add_object("obstacle", "box", size=(0.12, 0.12, 0.12), at=(0, 0, 5), mass=0.0)
+    box.set_pose(tuple(ahead))
 
 
 def test_a_planned_motion_still_stops_on_contact() -> None:

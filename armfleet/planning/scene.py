@@ -37,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from armfleet.description.mesh_units import mesh_unit_m
 from armfleet.messages import FloatArray
 from armfleet.planning.compiled_check import compiled_scene_check, placement_numbers
 from armfleet.planning.object_geometry import convex_hull
@@ -135,6 +136,10 @@ def arm_geometry(
     geometry = pin.buildGeomFromUrdfString(own, urdf, pin.GeometryType.COLLISION)
     for item in geometry.geometryObjects:
         if isinstance(item.geometry, coal.BVHModelBase):
+            unit = mesh_unit_m(item.meshPath)
+            if unit != 1.0:  # coal ignores a COLLADA unit; PyBullet applies it
+                item.meshScale = item.meshScale * unit
+                item.geometry = coal.MeshLoader().load(item.meshPath, item.meshScale)
             item.geometry = convex_hull(item.geometry)
     hand = None
     if finger_joints:
