@@ -84,3 +84,27 @@ def test_echo_of_a_busy_topic_prints_messages_only(bob_world: WorldProcess) -> N
     assert echoed.returncode == 0, echoed.stderr
     assert echoed.stderr == ""
     assert echoed.stdout.count("---") >= 1
+
+
+def test_echo_stops_on_ctrl_c_when_started_with_it_ignored(bob_world: WorldProcess) -> None:
+    """A shell's background job, or a pytest-xdist worker's child, inherits SIGINT ignored
+    (Python then leaves it so): echo, which runs until Ctrl-C, still stops on it."""
+    echo = subprocess.Popen(
+        [*ARMFLEET, "topic", "echo", "/collisions"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=runtime_env(bob_world.runtime_dir),
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+    )
+    try:
+        assert echo.stderr is not None
+        line = echo.stderr.readline()  # the listening hint: it has subscribed
+        assert line.startswith("listening on /collisions"), line
+        echo.send_signal(signal.SIGINT)
+        echo.wait(timeout=HINT_WAIT_S)
+    finally:
+        if echo.poll() is None:
+            echo.kill()
+            echo.wait()
+    assert echo.returncode == 130

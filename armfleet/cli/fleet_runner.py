@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from armfleet import topics
 from armfleet.cli.api_options import check_api_arguments, start_api
+from armfleet.cli.ctrl_c import let_ctrl_c_stop
 from armfleet.cli.foxglove_options import start_foxglove
 from armfleet.cli.listen_ports import check_run_ports
 from armfleet.cli.record_option import RunRecording
@@ -44,9 +45,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, on_term)  # SIGTERM shuts down like Ctrl-C
-    # Started in the background by a shell, a process inherits SIGINT ignored; this
-    # command runs until Ctrl-C, so Ctrl-C (or kill -INT) must always reach it.
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    let_ctrl_c_stop()  # this command runs until Ctrl-C (or kill -INT)
 
     def before_spawn(world: World) -> None:
         recording.start(world)

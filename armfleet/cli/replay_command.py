@@ -14,6 +14,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
+from armfleet.cli.ctrl_c import let_ctrl_c_stop
 from armfleet.cli.number_arguments import port, replay_speed
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.path_arguments import path_text
@@ -90,6 +91,7 @@ def _play_live(recording: Recording, args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, on_term)  # SIGTERM ends like Ctrl-C
+    let_ctrl_c_stop()  # it may wait for a browser, or loop, until Ctrl-C
     viewer = start_replay_viewer(args.viewer_port)
     try:
         print(f"viewer: {viewer.url}", flush=True)

@@ -22,6 +22,7 @@ from typing import Any
 import yaml
 
 from armfleet.cli.api_options import add_connect_arguments, connect_from
+from armfleet.cli.ctrl_c import let_ctrl_c_stop
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.remote import ConnectionLost
 from armfleet.remote.client import DEFAULT_TIMEOUT_S
@@ -89,6 +90,8 @@ def echo_topic(args: argparse.Namespace) -> int:
                     received.get_nowait()
 
     limit: float | None = args.timeout
+    if limit is None:
+        let_ctrl_c_stop()  # it runs until Ctrl-C
     started = time.monotonic()
     # Each answer of the world waits at most the time left, so that connecting and
     # subscribing fit in the limit too (the subscription asks twice: stream, subscribe).
