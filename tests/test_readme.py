@@ -45,6 +45,8 @@ PAGES = (
 RUN_ELSEWHERE = {
     # Its client example needs a world running in another process.
     "live-api.md": "tests/test_remote_session.py::test_the_live_api_example_runs_as_written",
+    # Each block is a script of its own (a vector env's workers import it), training shortened.
+    "envs.md": "tests/test_docs_envs_snippets.py::test_the_snippet_runs_as_a_script",
 }
 #: Longest README: the short path fits a couple of screens (it was 610 lines).
 MAX_README_LINES = 150
