@@ -81,10 +81,12 @@ def test_the_app_stamps_each_instant_with_its_own_time_and_measures_100_hz(
     client.subscribe("/bob/joint_states", "/tf")
     client.wait_for(lambda: len(client.app_stamps("/bob/joint_states")) >= 200)
     stamps = client.app_stamps("/bob/joint_states")[10:]  # past the first time frames
-    # No stamp is ahead of its message, and none more than one instant behind (the SDK
-    # may send a time frame just after the message it precedes).
+    # Every stamp is its message's own instant or a neighbouring one: the SDK sends time
+    # frames and messages through separate queues, so a time frame may pass the message
+    # before or after it (seen both ways on a loaded CI: -10 ms and +10 ms). Ten messages
+    # on one stamp, the bug, is 90 ms off.
     for log, app in stamps:
-        assert 0 <= log - app <= period_ns, (log, app)
+        assert abs(log - app) <= period_ns, (log, app)
     shared = Counter(app for _, app in stamps)
     assert max(shared.values()) <= 2  # was 10: every message of 0.1 s on one stamp
     apps = [app for _, app in stamps]
