@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import pinocchio as pin
@@ -45,6 +45,7 @@ from armfleet.messages import (
 from armfleet.motion.cartesian_path import LinearPathPlanner
 from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, MoveOptions
 from armfleet.motion.pose_goal import PoseGoal
+from armfleet.motion.timed_trajectory import check_waypoints, sample_waypoints
 from armfleet.physics.arm_body import ArmBody
 from armfleet.runtime.bus import Bus
 from armfleet.runtime.lifetime import Lifetime, while_alive
@@ -457,6 +458,63 @@ class Arm:
         self._publish_command(motion.position[-1])  # for the record; the samples replace it
         controller.follow_samples(motion)
         return motion.steps * controller.period
+
+    @while_alive
+    def follow_trajectory(
+        self,
+        times: Sequence[float],
+        positions: Sequence[Sequence[float]],
+        velocities: Sequence[Sequence[float]] | None = None,
+        accelerations: Sequence[Sequence[float]] | None = None,
+    ) -> float:
+        """Follow timed waypoints from the present reference (replacing any motion), as
+        joint_trajectory_controller does with a ``JointTrajectory``; returns at once.
+
+        Args:
+            times: each waypoint's time after now [s], increasing, the first > 0.
+            positions: per waypoint, one position per joint (:attr:`joint_names`).
+            velocities, accelerations: per waypoint, or None: with all three, a quintic
+                per segment; with velocities, a cubic; with positions only, a smooth
+                cubic through them (:mod:`armfleet.motion.timed_trajectory`). The last
+                point is at rest.
+
+        Returns:
+            The trajectory's duration [s].
+
+        Raises:
+            TrajectoryRefused (empty, lengths, not finite, times not increasing, not at
+            rest at the end), ArmfleetError (the samples leave the joint position,
+            velocity or acceleration limits), SelfContactError, ProtectiveStopError,
+            ArmFault: nothing is sent and the current motion goes on.
+        """
+        controller = self._position_controller
+        waypoints = check_waypoints(
+            self._name, len(self.joint_names), times, positions, velocities, accelerations
+        )
+        if self._controller_manager.fault is not None:
+            raise ArmFault(self._name, self._controller_manager.fault)
+        if controller.stop_reason is not None:
+            raise ProtectiveStopError(self._name, controller.stop_reason)
+        reference = controller.trajectory
+        if reference is None:
+            raise ArmfleetError(f"{self._name}: position_controller is not active")
+        start = (
+            reference.position.copy(),
+            reference.velocity.copy(),
+            reference.acceleration.copy(),
+        )
+        motion = sample_waypoints(waypoints, start, controller.period)
+        controller.check_samples(motion)
+        self._self_contact.check_samples(start[0], motion, controller.period, self._body.position)
+        self._publish_command(motion.position[-1])  # for the record; the samples replace it
+        controller.follow_samples(motion)
+        return motion.steps * controller.period
+
+    @while_alive
+    def halt(self) -> float:
+        """Bring the motion to rest within the controller's limits and hold there (what
+        a cancelled trajectory does). Returns the stopping time [s]."""
+        return self._position_controller.halt()
 
     def _resolve(self, pose: Any, frame: str, link: str) -> tuple[pin.SE3, str]:
         """The world pose wanted for ``link`` and the link's prefixed frame name."""

@@ -136,6 +136,11 @@ class JerkLimitedTrajectory:
         return self._moving
 
     @property
+    def samples(self) -> SampledMotion | None:
+        """The sampled motion being followed, or None (a Ruckig motion, or at rest)."""
+        return self._samples
+
+    @property
     def following_samples(self) -> bool:
         """Whether the reference is following a :class:`SampledMotion`."""
         return self._samples is not None

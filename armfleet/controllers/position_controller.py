@@ -332,6 +332,20 @@ class PositionController(Controller):
         logger.warning("%s: protective stop: %s", self.arm.name, reason)
         return True
 
+    def halt(self) -> float:
+        """Bring the reference to rest within the normal acceleration and jerk limits, and
+        hold there. Returns the stopping time [s] (0 when already at rest)."""
+        trajectory = self.trajectory
+        if trajectory is None:
+            raise ArmfleetError(f"{self.arm.name}: position_controller is not active")
+        if not trajectory.moving:
+            return 0.0
+        n = len(self._arm)
+        return trajectory.stop(
+            np.full(n, self.parameters["max_acceleration_rad_s2"]),
+            np.full(n, self.parameters["max_jerk_rad_s3"]),
+        )
+
     def reset_stop(self) -> None:
         """Accept motions again after a protective stop."""
         self.stop_reason = None

@@ -296,6 +296,36 @@ class World:
         # foxglove-sdk is loaded only now; without the extra, one line says how to add it.
         return front_end("foxglove")(self, port, host=host, rate_hz=rate_hz)
 
+    @owning  # it subscribes to the bus: never from another thread during a step
+    def serve_ros(
+        self,
+        domain_id: int | None = None,
+        *,
+        localhost_only: bool = True,
+        rate_hz: float = 100.0,
+    ) -> Any:
+        """Serve this world to ROS 2 nodes (docs/ros2.md): ``/clock``, ``/tf``,
+        ``/tf_static`` and each arm's ros2_control interfaces (joint states, robot
+        description, joint_trajectory_controller's action and topic, the forward position
+        controller's commands, the gripper's action). Call it from the thread that steps
+        the world; keep stepping for nodes to be served.
+
+        Args:
+            domain_id: the ROS domain (0..232); None: ``ROS_DOMAIN_ID``, or 0.
+            localhost_only: keep discovery and traffic on this machine (the default).
+            rate_hz: instants of the streamed topics per simulated second.
+
+        Returns:
+            The running :class:`armfleet.ros.RosServer`; close it, or it closes with
+            the world.
+
+        Raises:
+            RosError: bad domain or rate, or the world is closed.
+            MissingExtra: ROS 2 is not installed (the one-line install command).
+        """
+        # rclpy is loaded only now; without it, one line says how to install it.
+        return front_end("ros")(self, domain_id, localhost_only=localhost_only, rate_hz=rate_hz)
+
     def process_requests(self) -> int:
         """Run the submitted requests now (the stepping thread calls this; also when paused)."""
         return self._requests.drain()
