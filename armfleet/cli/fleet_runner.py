@@ -16,6 +16,7 @@ from armfleet.cli.ctrl_c import let_ctrl_c_stop
 from armfleet.cli.foxglove_options import start_foxglove
 from armfleet.cli.listen_ports import check_run_ports
 from armfleet.cli.record_option import RunRecording
+from armfleet.cli.ros_options import start_ros
 from armfleet.cli.status_line import status_line
 from armfleet.cli.world_loop import run_world
 from armfleet.messages import BringupEvent, BringupStage
@@ -76,6 +77,7 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
             # lands in the middle of the spec's bring-up.
             run_state = RunState()
             foxglove = start_foxglove(world, args)  # closed with the world if the API fails
+            ros = start_ros(world, args)
             server = start_api(world, run_state, args)
             try:
                 run_world(
@@ -95,6 +97,8 @@ def run_fleet(spec: FleetSpec, args: argparse.Namespace) -> int:
             finally:
                 if foxglove is not None:
                     foxglove.close()
+                if ros is not None:
+                    ros.close()
                 if server is not None:
                     server.close()
         finally:

@@ -11,6 +11,7 @@ import time
 from armfleet import topics
 from armfleet.checks.network_address import DEFAULT_BIND
 from armfleet.cli.parser import UsageError
+from armfleet.cli.ros_options import ROS_DETAILS
 from armfleet.messages import BringupEvent, BringupStage
 from armfleet.remote import Client, NoWorldFound, connect, runtime_file
 from armfleet.remote.client_quotas import RAISED_BY, ClientQuotas
@@ -34,6 +35,8 @@ _NEW_WORLD_OPTIONS = (
     ("--foxglove", "foxglove", None),
     ("--foxglove-bind", "foxglove_bind", DEFAULT_BIND),
     ("--foxglove-rate", "foxglove_rate", None),
+    ("--ros", "ros", False),
+    *ROS_DETAILS,
     *(
         (option, f"quota_{quota}", getattr(ClientQuotas(), quota))
         for quota, option in RAISED_BY.items()

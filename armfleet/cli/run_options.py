@@ -11,6 +11,7 @@ from armfleet.cli.number_arguments import port, run_duration
 from armfleet.cli.parser import OneLineParser, UsageError
 from armfleet.cli.path_arguments import path_text
 from armfleet.cli.record_option import HELP, METAVAR, check_record_path
+from armfleet.cli.ros_options import add_ros_arguments, check_ros_arguments
 from armfleet.description.package_finder import PACKAGE_PATH_ENV
 
 
@@ -41,6 +42,7 @@ def add_run_arguments(parser: OneLineParser) -> None:
         "$(find) (repeatable; searched before ARMFLEET_PACKAGE_PATH and ROS_PACKAGE_PATH)",
     )  # fmt: skip
     add_foxglove_arguments(parser)
+    add_ros_arguments(parser)
 
 
 def check_run_arguments(args: argparse.Namespace) -> None:
@@ -48,6 +50,7 @@ def check_run_arguments(args: argparse.Namespace) -> None:
     checked while parsing)."""
     check_record_path(args.record)
     check_foxglove_arguments(args)
+    check_ros_arguments(args)
     use_package_paths(args.package_path)
 
 

@@ -32,8 +32,8 @@ from tf2_msgs.msg import TFMessage as RosTFMessage
 from visualization_msgs.msg import MarkerArray
 
 from armfleet import topics
-from armfleet.checks.real_numbers import real_number
-from armfleet.errors import ArmfleetError, InvalidNumber
+from armfleet.checks.number_ranges import ROS_DOMAIN_ID, ROS_RATE_HZ
+from armfleet.errors import ArmfleetError
 from armfleet.ros import conversions
 from armfleet.ros.errors import RosError
 from armfleet.ros.forward_command import ForwardCommand
@@ -60,8 +60,6 @@ NODE_NAME = "armfleet"
 #: Instants of the streamed topics per simulated second by default (a controller
 #: manager's usual update rate).
 DEFAULT_RATE_HZ = 100.0
-#: Highest domain id ROS 2 supports on Linux.
-MAX_DOMAIN_ID = 232
 #: Executor threads: goals wait in them while their arm moves.
 EXECUTOR_THREADS = 64
 #: How long closing waits for the executor's threads [s].
@@ -105,21 +103,11 @@ class RosServer:
         localhost_only: bool = True,
         rate_hz: float = DEFAULT_RATE_HZ,
     ) -> None:
-        if domain_id is not None and (
-            isinstance(domain_id, bool)
-            or not isinstance(domain_id, int)
-            or not 0 <= domain_id <= MAX_DOMAIN_ID
-        ):
-            raise RosError(
-                f"ROS domain {domain_id!r} is invalid; give an integer in [0, {MAX_DOMAIN_ID}]"
-            )
-        valid = "a rate in (0, 1000] Hz"
-        try:
-            rate = real_number(rate_hz, "ROS rate", valid, low=0.0, high=1000.0)
-        except InvalidNumber as exc:
-            raise RosError(str(exc)) from None
-        if rate == 0.0:
-            raise RosError(f"ROS rate 0 is invalid; give {valid}")
+        if domain_id is not None and not ROS_DOMAIN_ID.contains(domain_id):
+            raise RosError(f"ROS domain {domain_id!r} is invalid; give {ROS_DOMAIN_ID.valid}")
+        if not ROS_RATE_HZ.contains(rate_hz):
+            raise RosError(f"ROS rate {rate_hz!r} is invalid; give {ROS_RATE_HZ.valid}")
+        rate = float(rate_hz)
         if world.closed:
             raise RosError("cannot serve a closed world to ROS 2")
         self._world = world
@@ -132,7 +120,7 @@ class RosServer:
         self._context = rclpy.Context()
         rclpy.init(
             context=self._context,
-            domain_id=domain_id,
+            domain_id=None if domain_id is None else int(domain_id),
             signal_handler_options=SignalHandlerOptions.NO,
         )
         self.domain_id = self._context.get_domain_id()
