@@ -11,7 +11,9 @@ Commands (JSON holds their arguments):
   later ones sent ``after`` seconds after the first; each one's status, code and text;
 - ``publish``: ``{"arm", "trajectory"}``: one message on the joint_trajectory topic;
 - ``forward``: ``{"arm", "values"}``: one message on forward_position_controller/commands;
-- ``gripper``: ``{"arm", "position", "max_effort"}``: a GripperCommand goal.
+- ``gripper``: ``{"arm", "position", "max_effort"}``: a GripperCommand goal;
+- ``graph``: ``{"arm", "topics"}``: each topic's publishers as ``ros2 topic info
+  --verbose`` shows them: node, type and type hash.
 
 A trajectory is ``{"joint_names", "points": [{"positions", "velocities"?,
 "accelerations"?, "time_from_start"}], "stamp"?}`` (times in seconds).
@@ -47,14 +49,14 @@ LATCHED = QoSProfile(
 
 def _duration(seconds: float) -> Duration:
     whole = math.floor(seconds)
-    return Duration(sec=int(whole), nanosec=int(round((seconds - whole) * 1e9)))
+    return Duration(sec=int(whole), nanosec=round((seconds - whole) * 1e9))
 
 
 def _trajectory(spec: dict[str, Any]) -> JointTrajectory:
     message = JointTrajectory(joint_names=list(spec["joint_names"]))
     stamp = float(spec.get("stamp", 0.0))
     whole = math.floor(stamp)
-    message.header.stamp = Time(sec=int(whole), nanosec=int(round((stamp - whole) * 1e9)))
+    message.header.stamp = Time(sec=int(whole), nanosec=round((stamp - whole) * 1e9))
     for point in spec["points"]:
         message.points.append(
             JointTrajectoryPoint(
@@ -213,6 +215,35 @@ def gripper(client: Client, arm: str, position: float, max_effort: float) -> dic
     }
 
 
+def graph(client: Client, topics: list[str]) -> dict[str, Any]:
+    node = client.node
+
+    def publishers(topic: str) -> list[Any]:
+        return list(node.get_publishers_info_by_topic(topic))
+
+    def named(topic: str) -> bool:  # node names arrive after the endpoints
+        found = publishers(topic)
+        return bool(found) and all(not i.node_name.startswith("_NODE_NAME") for i in found)
+
+    client.spin_until(lambda: all(named(topic) for topic in topics))
+    return {
+        topic: [
+            {
+                "node": info.node_name,
+                "type": info.topic_type,
+                "hash": _hash_text(info.topic_type_hash),
+            }
+            for info in publishers(topic)
+        ]
+        for topic in topics
+    }
+
+
+def _hash_text(hashed: Any) -> str:
+    """A type hash as ROS 2's tools print it: ``RIHS01_<hex>``."""
+    return f"RIHS{hashed.version:02d}_{hashed.value.hex()}"
+
+
 def main() -> None:
     domain, command, arguments = int(sys.argv[1]), sys.argv[2], json.loads(sys.argv[3])
     client = Client(domain)
@@ -231,6 +262,8 @@ def main() -> None:
             out = publish(client, topic, Float64MultiArray, message)
         elif command == "gripper":
             out = gripper(client, arm, arguments["position"], arguments["max_effort"])
+        elif command == "graph":
+            out = graph(client, arguments["topics"])
         else:
             raise SystemExit(f"unknown command {command}")
         print(json.dumps(out), flush=True)

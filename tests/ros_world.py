@@ -24,7 +24,7 @@ from tests.remote_world import WorldProcess
 pytest.importorskip("rclpy", reason="ROS 2 tests need armfleet[ros]")
 pytest.importorskip("control_msgs", reason="ROS 2 tests need ros_interfaces/ built")
 
-from armfleet.ros.loopback import loopback_environment  # noqa: E402
+from armfleet.ros.loopback import loopback_environment
 
 CLIENT = Path(__file__).with_name("ros_client.py")
 #: Longest a node may take (discovery, a goal) [s]: a generous bound, not a timing test.
@@ -33,7 +33,7 @@ NODE_TIMEOUT_S = 120.0
 FIRST_DOMAIN = 100
 
 
-def test_domain() -> int:
+def ros_domain_id() -> int:
     worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
     return FIRST_DOMAIN + int(worker.removeprefix("gw") or 0)
 
@@ -77,10 +77,10 @@ def ros_world(runtime_dir: Path, domain: int, *arms: str) -> WorldProcess:
     return world
 
 
-@pytest.fixture
-def served(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[WorldProcess, int]]:
+def serve(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[WorldProcess, int]]:
+    """A test file's ``served`` fixture: the world and its ROS domain, stopped after."""
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
-    domain = test_domain()
+    domain = ros_domain_id()
     world = ros_world(tmp_path, domain)
     try:
         yield world, domain

@@ -5,14 +5,24 @@ received (an independent model of the same arm), spawn poses included."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import armfleet
-from tests.ros_world import ros_node, served  # noqa: F401  (the fixture)
+from tests.remote_world import WorldProcess
+from tests.ros_world import ros_node, serve
 
 RATE_HZ = 100.0
+
+
+@pytest.fixture
+def served(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[WorldProcess, int]]:
+    """bob and toby served to ROS 2 (tests/ros_world.py), and the domain."""
+    yield from serve(tmp_path, monkeypatch)
 
 
 def _matrix(entry: dict) -> np.ndarray:

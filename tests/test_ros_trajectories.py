@@ -9,18 +9,27 @@ from __future__ import annotations
 
 import signal
 import time
+from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
+import pytest
 
 import armfleet
-from tests.remote_world import wait_until
-from tests.ros_world import ros_node, served, start_ros_node  # noqa: F401  (the fixture)
+from tests.remote_world import WorldProcess, wait_until
+from tests.ros_world import ros_node, serve, start_ros_node
 
 # action_msgs/GoalStatus
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
 BOB = [f"bob_panda_joint{i}" for i in range(1, 8)]
 TOBY = [f"toby_panda_joint{i}" for i in range(1, 8)]
 STEP = np.array([0.4, -0.3, 0.3, -0.4, 0.3, 0.4, -0.5])
+
+
+@pytest.fixture
+def served(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[WorldProcess, int]]:
+    """bob and toby served to ROS 2 (tests/ros_world.py), and the domain."""
+    yield from serve(tmp_path, monkeypatch)
 
 
 def _trajectory(names: list[str], start: np.ndarray, *stops: tuple[float, np.ndarray]) -> dict:
