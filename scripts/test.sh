@@ -9,6 +9,7 @@ cd "$(dirname "$0")/.."
 missing=()
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)  # the viewer's browser tests
 command -v g++ >/dev/null 2>&1 || missing+=(g++)  # armfleet's C++ part (CMake: from PyPI)
+command -v strace >/dev/null 2>&1 || missing+=(strace)  # the ROS 2 loopback test traces the world
 if [ ${#missing[@]} -gt 0 ]; then
   echo "== installing Debian's ${missing[*]}"
   sudo_cmd=""
@@ -23,6 +24,9 @@ if [ ! -x .venv/bin/python ]; then
 fi
 echo "== installing armfleet[test] (every extra; compiles the fleet kernel with g++)"
 .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[test]"
+echo "== building ROS 2's tf2_msgs and control_msgs (ros_interfaces/README.md; ~3 min on 2 cores)"
+.venv/bin/python -m pip install -q --disable-pip-version-check --no-build-isolation \
+  ./ros_interfaces/tf2_msgs ./ros_interfaces/control_msgs
 
 echo "== ruff"
 .venv/bin/ruff check .

@@ -31,7 +31,7 @@ import rclpy
 from builtin_interfaces.msg import Duration, Time
 from control_msgs.action import FollowJointTrajectory, GripperCommand
 from control_msgs.msg import JointTolerance
-from rclpy.action import ActionClient
+from rclpy.action.client import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -147,7 +147,7 @@ def watch(client: Client, arm: str, seconds: float) -> dict[str, Any]:
 
 
 def goals(client: Client, arm: str, specs: list[dict[str, Any]], cancel_after: float | None) -> Any:
-    action = ActionClient(
+    action: ActionClient[Any, Any, Any] = ActionClient(
         client.node,
         FollowJointTrajectory,
         f"/{arm}/joint_trajectory_controller/follow_joint_trajectory",
@@ -199,7 +199,9 @@ def publish(client: Client, topic: str, message_type: Any, message: Any) -> dict
 
 
 def gripper(client: Client, arm: str, position: float, max_effort: float) -> dict[str, Any]:
-    action = ActionClient(client.node, GripperCommand, f"/{arm}/gripper_controller/gripper_cmd")
+    action: ActionClient[Any, Any, Any] = ActionClient(
+        client.node, GripperCommand, f"/{arm}/gripper_controller/gripper_cmd"
+    )
     if not action.wait_for_server(timeout_sec=WAIT_S):
         raise SystemExit("no gripper_cmd server")
     goal = GripperCommand.Goal()

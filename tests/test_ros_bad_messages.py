@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -28,11 +29,11 @@ def served(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Wo
     yield from serve(tmp_path, monkeypatch)
 
 
-def _point(positions: list[float], t: float, **extra: list[float]) -> dict:
+def _point(positions: list[float], t: float, **extra: list[float]) -> dict[str, Any]:
     return {"positions": positions, "time_from_start": t, **extra}
 
 
-def _cases(q: list[float]) -> list[tuple[str, dict, int, str]]:
+def _cases(q: list[float]) -> list[tuple[str, dict[str, Any], int, str]]:
     """(what, trajectory, error code, a word of the reason)."""
     moved = [v + 0.2 for v in q]
     return [

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -25,7 +26,7 @@ def served(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Wo
     yield from serve(tmp_path, monkeypatch)
 
 
-def _matrix(entry: dict) -> np.ndarray:
+def _matrix(entry: dict[str, Any]) -> np.ndarray:
     x, y, z, w = entry["rotation"]
     pose = np.eye(4)
     pose[:3, :3] = pin.Quaternion(w, x, y, z).toRotationMatrix()
@@ -33,7 +34,7 @@ def _matrix(entry: dict) -> np.ndarray:
     return pose
 
 
-def _world_pose(frame: str, tree: dict[str, dict]) -> np.ndarray:
+def _world_pose(frame: str, tree: dict[str, dict[str, Any]]) -> np.ndarray:
     """``world -> frame`` by walking the received transforms up to ``world``."""
     pose = np.eye(4)
     while frame != "world":

@@ -11,6 +11,7 @@ import signal
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -32,7 +33,9 @@ def served(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Wo
     yield from serve(tmp_path, monkeypatch)
 
 
-def _trajectory(names: list[str], start: np.ndarray, *stops: tuple[float, np.ndarray]) -> dict:
+def _trajectory(
+    names: list[str], start: np.ndarray, *stops: tuple[float, np.ndarray]
+) -> dict[str, Any]:
     return {
         "joint_names": names,
         "points": [

@@ -35,6 +35,7 @@ from armfleet import topics
 from armfleet.checks.number_ranges import ROS_DOMAIN_ID, ROS_RATE_HZ
 from armfleet.errors import ArmfleetError
 from armfleet.ros import conversions
+from armfleet.ros.cdr import JointStateLayout, TfLayout
 from armfleet.ros.errors import RosError
 from armfleet.ros.forward_command import ForwardCommand
 from armfleet.ros.gripper_action import GripperAction
@@ -134,6 +135,7 @@ class RosServer:
         self._diagnostics = self._node.create_publisher(DiagnosticArray, "/diagnostics", _STREAM)
         self._collisions = self._node.create_publisher(MarkerArray, "/collisions", _STREAM)
         self._arms: dict[str, _ArmInterfaces] = {}
+        self._tf_layouts: dict[tuple[tuple[str, str], ...], TfLayout] = {}
         self._next_clock = 0.0
         self._watches = [
             world.bus.subscribe(topics.TF, self._on_tf, period_s=self._period),
@@ -207,7 +209,8 @@ class RosServer:
             self._next_clock = now + self._period
             self._clock.publish(Clock(clock=conversions.ros_time(now)))
         for interfaces in self._arms.values():
-            interfaces.trajectory.on_step(now)
+            if interfaces.trajectory.busy:
+                interfaces.trajectory.on_step(now)
 
     def _add_arm(self, arm: Arm) -> None:
         node, bus, name = self._node, self._world.bus, arm.name
@@ -223,10 +226,11 @@ class RosServer:
             [],
         )
         self._arms[name] = interfaces
+        layout = JointStateLayout(arm.joint_state.name)
         interfaces.watches += [
             bus.subscribe(
                 topics.joint_states(name),
-                lambda state: joint_states.publish(conversions.joint_state(state)),
+                lambda state: joint_states.publish(layout.serialize(state)),
                 period_s=self._period,
             ),
             bus.subscribe(topics.status(name), self._on_status),
@@ -258,7 +262,11 @@ class RosServer:
         self._tf_static.publish(conversions.tf_message(static))
 
     def _on_tf(self, message: TFMessage) -> None:
-        self._tf.publish(conversions.transforms(message))
+        frames = tuple((t.frame_id, t.child_frame_id) for t in message.transforms)
+        layout = self._tf_layouts.get(frames)
+        if layout is None:
+            layout = self._tf_layouts[frames] = TfLayout(frames)
+        self._tf.publish(layout.serialize(message))
 
     def _on_status(self, status: ArmStatus) -> None:
         self._diagnostics.publish(diagnostics(status))

@@ -92,6 +92,12 @@ class TrajectoryAction:
         self._server.destroy()
 
     # -- stepping thread --------------------------------------------------------------
+    @property
+    def busy(self) -> bool:
+        """Whether a trajectory is waiting or followed (else :meth:`on_step` has nothing
+        to do: the server skips it)."""
+        return self._controller.active is not None
+
     def on_step(self, now: float) -> None:
         """Judge the trajectory followed; send feedback at the publication rate."""
         self._controller.on_step(now)
