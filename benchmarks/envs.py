@@ -1,8 +1,10 @@
 """Environment benchmark: CPU time of a reset and of a step, armfleet beside panda-gym.
 
-Side by side in one process, in turns (so that a drift of the machine hits all three):
+Side by side in one process, in turns (so that a drift of the machine hits all four):
   reach    - ``armfleet/Reach-v0`` with one Panda (``ReachEnv(arm_count=1)``), joint-delta
              actions, 20 physics steps of 1 ms per environment step;
+  servo    - the same in the form SAC learns (benchmarks/learning.py): ``tool_servo``
+             actions (IK each step, the responsive controller), ``near`` targets;
   handover - ``armfleet/Handover-v0`` (bob, toby, two tables, the bar, the mat), tool-delta
              actions with IK, 20 physics steps of 1 ms;
   panda    - panda-gym's ``PandaReach-v3`` (one Panda, end-effector deltas with IK), 20
@@ -64,6 +66,7 @@ def panda_reach() -> gym.Env[Any, Any]:
 
 MAKERS: dict[str, Callable[[], gym.Env[Any, Any]]] = {
     "reach": lambda: ReachEnv(arm_count=1),
+    "servo": lambda: ReachEnv(arm_count=1, action_kind="tool_servo", target_region="near"),
     "handover": HandoverEnv,
     "panda": panda_reach,
 }

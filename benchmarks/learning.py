@@ -1,20 +1,23 @@
 """Learning baseline: Stable-Baselines3's SAC on ``armfleet/Reach-v0`` with one Panda.
 
 What a user needs to tell "too few steps" from "a broken task": SAC trains on the flat
-form of the environment (``gym.make("armfleet/Reach-v0", flat=True, ...)``: one Panda,
-actions in [-1, 1], 200 steps per episode, the shipped reward: minus the tool0-target
-distance every step, +1 on success, a stop penalty; docs/envs.md), no wrapper of one's
-own. The actions are tool deltas (``action_kind="tool_delta"``, tool0 moved up to 5 mm
-along x, y and z per step: :data:`TOOL_STEP_M`); ``--action-kind joint_deltas`` trains on
-Reach's default joint deltas instead (0 % after 20,000 steps: docs/envs.md). Every
-``--eval-every`` steps the deterministic policy runs
+form of the environment, no wrapper of one's own:
+``gym.make("armfleet/Reach-v0", flat=True, action_kind="tool_servo", target_region="near",
+max_episode_steps=50)``: one Panda; actions in [-1, 1], tool0 moved up to 2 cm along x, y
+and z from where it is (its orientation held), on the responsive controller that comes
+with ``tool_servo``; a target in a 0.3 m cube around tool0's start, reached within 2 cm
+(Reach's tolerance), 50 steps of 20 ms per episode; the shipped reward (minus the
+tool0-target distance every step, +1 on success, a stop penalty; docs/envs.md).
+``--action-kind`` and ``--target-region`` train on Reach's other forms, for comparison
+(``tool_delta`` with 5 mm steps: :data:`TOOL_STEP_M`; ``workspace`` targets: 200 steps).
+Every ``--eval-every`` steps the deterministic policy runs
 ``--curve-episodes`` seeded episodes (seeds 10_000, 10_001, ...: never trained on) and
 their success rate is a point of the learning curve; at the end it runs
 ``--final-episodes`` (100) seeded episodes. It writes the curve as a PNG
 (docs/images/reach-learning.png) and the figures as JSON
 (benchmarks/results/learning.json), and prints the success reached and the time taken.
 
-    nice python benchmarks/learning.py                  # 15,000 steps (10-30 min)
+    nice python benchmarks/learning.py                  # 30,000 steps (~10 min)
     python benchmarks/learning.py --steps 2000 --short  # a smoke run (no PNG, no JSON)
 
 Needs the ``rl`` extra (``pip install 'armfleet[rl]'``) and matplotlib (``plot``).
@@ -41,29 +44,32 @@ RESULTS = ROOT / "benchmarks" / "results"
 FIGURE = ROOT / "docs" / "images" / "reach-learning.png"
 #: Evaluation episodes are seeded from here on (training episodes draw from seed 0's stream).
 EVAL_SEED = 10_000
-#: Largest move and turn of tool0 per step with tool-delta actions [m, rad]. 5 mm per
-#: 20 ms step (0.25 m/s) is what the Panda's jerk-limited motion follows within a few
-#: steps; with the default 2 cm the target runs ahead of the arm (12 steps of 2 cm along x
-#: moved tool0 5.4 cm) and SAC learned nothing in 20,000 steps. No turn: reaching a
-#: position needs none (the option's floor is > 0).
+#: Episode length of the baseline [steps]: 1 s at the 20 ms control period (panda-gym's
+#: PandaReach: 50 steps of 40 ms).
+EPISODE_STEPS = 50
+#: Largest move and turn of tool0 per step with ``tool_delta`` actions [m, rad] (only for
+#: the comparison runs with ``--action-kind tool_delta``).
 TOOL_STEP_M, TOOL_TURN_RAD = 0.005, 1e-4
 
 
-def make_env(action_kind: str) -> gym.Env[Any, Any]:
-    """Reach with one Panda, flat; ``tool_delta``: moves of tool0 along x, y, z of at most
-    :data:`TOOL_STEP_M` (its turns bounded to :data:`TOOL_TURN_RAD`)."""
+def make_env(action_kind: str, target_region: str = "near") -> gym.Env[Any, Any]:
+    """Reach with one Panda, flat. ``tool_servo`` (the default): tool0 moved up to 2 cm
+    along x, y and z from where it is, targets ``"near"``, :data:`EPISODE_STEPS` steps;
+    ``tool_delta``: moves of the previous target of at most :data:`TOOL_STEP_M`."""
+    options: dict[str, Any] = {"target_region": target_region}
+    if target_region == "near":
+        options["max_episode_steps"] = EPISODE_STEPS
     if action_kind == "tool_delta":
-        return gym.make(
-            REACH_ID, flat=True, action_kind=action_kind, max_tool_step_m=TOOL_STEP_M,
-            max_tool_step_rad=TOOL_TURN_RAD,
-        )  # fmt: skip
-    return gym.make(REACH_ID, flat=True, action_kind=action_kind)
+        options.update(max_tool_step_m=TOOL_STEP_M, max_tool_step_rad=TOOL_TURN_RAD)
+    return gym.make(REACH_ID, flat=True, action_kind=action_kind, **options)
 
 
-def evaluate(model: Any, episodes: int, action_kind: str) -> tuple[float, float, float]:
+def evaluate(
+    model: Any, episodes: int, action_kind: str, target_region: str
+) -> tuple[float, float, float]:
     """The deterministic policy's success rate over ``episodes`` seeded episodes, their
     mean length [steps] and their mean final tool0-target distance [m]."""
-    env = make_env(action_kind)
+    env = make_env(action_kind, target_region)
     successes, lengths, distances = 0, [], []
     try:
         for index in range(episodes):
@@ -83,14 +89,18 @@ def evaluate(model: Any, episodes: int, action_kind: str) -> tuple[float, float,
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--steps", type=int, default=15_000, help="training steps")
+    parser.add_argument("--steps", type=int, default=30_000, help="training steps")
     parser.add_argument("--eval-every", type=int, default=2_500, help="steps between curve points")
-    parser.add_argument("--curve-episodes", type=int, default=10, help="episodes per point")
+    parser.add_argument("--curve-episodes", type=int, default=20, help="episodes per point")
     parser.add_argument("--final-episodes", type=int, default=100, help="episodes at the end")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
-        "--action-kind", default="tool_delta", choices=["tool_delta", "joint_deltas"],
-        help="tool_delta (default): tool0 moves; joint_deltas: Reach's default",
+        "--action-kind", default="tool_servo", choices=["tool_servo", "tool_delta", "joint_deltas"],
+        help="tool_servo (default): tool0 moved from where it is; the others: for comparison",
+    )  # fmt: skip
+    parser.add_argument(
+        "--target-region", default="near", choices=["near", "workspace"],
+        help="near (default): a 0.3 m cube around tool0's start; workspace: Reach's default",
     )  # fmt: skip
     parser.add_argument("--short", action="store_true", help="write no PNG and no JSON")
     args = parser.parse_args()
@@ -101,7 +111,7 @@ def main() -> int:
 
     torch.set_num_threads(1)  # a small network: one thread is the fastest on a shared machine
     del armfleet.envs  # imported to register the ids
-    env = make_env(args.action_kind)
+    env = make_env(args.action_kind, args.target_region)
     model = SAC(
         "MlpPolicy",
         env,
@@ -121,7 +131,9 @@ def main() -> int:
     class Curve(BaseCallback):
         def _on_step(self) -> bool:
             if self.num_timesteps % args.eval_every == 0:
-                success, length, distance = evaluate(model, args.curve_episodes, args.action_kind)
+                success, length, distance = evaluate(
+                    model, args.curve_episodes, args.action_kind, args.target_region
+                )
                 elapsed = time.perf_counter() - started
                 point = {"steps": self.num_timesteps, "success": success, "distance_m": distance}
                 curve.append({**point, "s": elapsed})
@@ -135,7 +147,9 @@ def main() -> int:
 
     model.learn(total_timesteps=args.steps, callback=Curve())
     trained_s = time.perf_counter() - started
-    success, length, distance = evaluate(model, args.final_episodes, args.action_kind)
+    success, length, distance = evaluate(
+        model, args.final_episodes, args.action_kind, args.target_region
+    )
     total_s = time.perf_counter() - started
     env.close()
     print(
@@ -150,6 +164,8 @@ def main() -> int:
         "env": REACH_ID,
         "algorithm": "SAC",
         "action_kind": args.action_kind,
+        "target_region": args.target_region,
+        "command": " ".join(["python", "benchmarks/learning.py", *sys.argv[1:]]),
         "steps": args.steps,
         "train_s": trained_s,
         "total_s": total_s,

@@ -143,17 +143,27 @@ def test_near_targets_are_drawn_the_same_for_a_seed(servo: ReachEnv) -> None:
     assert not np.array_equal(drawn[0], drawn[1])
 
 
+def servo_trace(env: ReachEnv) -> FloatArray:
+    """Observations and rewards of 15 sampled servo steps from ``reset(seed=11)``."""
+    observation, _ = env.reset(seed=11)
+    env.action_space.seed(11)
+    trace = [observation["arm0"]["tool_pose"], observation["arm0"]["target_offset"]]
+    for _ in range(15):
+        observation, reward, _, _, _ = env.step(env.action_space.sample())
+        trace += [observation["arm0"]["joint_positions"], np.array([reward])]
+    return np.concatenate(trace)
+
+
 def test_a_servo_episode_is_the_same_bit_for_bit_for_a_seed(servo: ReachEnv) -> None:
-    runs = []
-    for _ in range(2):
-        observation, _ = servo.reset(seed=11)
-        servo.action_space.seed(11)
-        trace = [observation["arm0"]["tool_pose"]]
-        for _ in range(15):
-            observation, reward, _, _, _ = servo.step(servo.action_space.sample())
-            trace += [observation["arm0"]["joint_positions"], np.array([reward])]
-        runs.append(np.concatenate(trace))
-    np.testing.assert_array_equal(runs[0], runs[1])
+    """After other episodes (the module's environment) as in a fresh environment."""
+    servo_trace(servo)  # an episode before
+    used = servo_trace(servo)
+    fresh_env = ReachEnv(action_kind="tool_servo", target_region="near")
+    try:
+        fresh = servo_trace(fresh_env)
+    finally:
+        fresh_env.close()
+    np.testing.assert_array_equal(used, fresh)
 
 
 def test_straight_servo_moves_reach_every_near_target_within_an_episode(

@@ -34,6 +34,7 @@ from armfleet.envs.tasks import (
     ReachTask,
     RewardKind,
     SceneTask,
+    TargetRegion,
     Task,
 )
 
@@ -63,6 +64,7 @@ __all__ = [
     "SceneTask",
     "StepLimits",
     "StopPolicy",
+    "TargetRegion",
     "Task",
     "register_envs",
 ]

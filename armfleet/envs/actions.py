@@ -11,6 +11,11 @@ float32 ``Box``:
 - ``"tool_delta"``: (dx, dy, dz, droll, dpitch, dyaw) of the previous tool0 target, along
   and about the **world** axes through tool0's origin, at most ``max_tool_step_m`` [m] and
   ``max_tool_step_rad`` [rad] per control period;
+- ``"tool_servo"``: (dx, dy, dz) of tool0 from where it *is* (measured), along the world
+  axes, at most ``max_tool_step_m`` per axis per control period [m]; its orientation is
+  held at the episode's start (as panda-gym's end-effector displacements). The arms then
+  run a responsive position controller (:mod:`armfleet.envs.servo_controller`), so that
+  they follow such a command within a few control periods;
 - ``"gripper"``: shape (1,), in [0, 1]: above 0.5 closes (grasp), otherwise opens.
 
 A value that is not finite, or an entry of the wrong shape, or a missing or unknown arm
@@ -47,6 +52,7 @@ class ActionKind(enum.Enum):
     JOINT_POSITIONS = "joint_positions"
     JOINT_DELTAS = "joint_deltas"
     TOOL_DELTA = "tool_delta"
+    TOOL_SERVO = "tool_servo"
 
     @classmethod
     def parse(cls, value: object) -> ActionKind:
@@ -89,6 +95,8 @@ def arm_action_space(
         main = spaces.Box(lower.astype(np.float32), upper.astype(np.float32), dtype=np.float32)
     elif kind is ActionKind.JOINT_DELTAS:
         main = spaces.Box(-limits.joint_rad, limits.joint_rad, (count,), dtype=np.float32)
+    elif kind is ActionKind.TOOL_SERVO:
+        main = spaces.Box(-limits.tool_m, limits.tool_m, (3,), dtype=np.float32)
     else:
         bound = np.array([limits.tool_m] * 3 + [limits.tool_rad] * 3, dtype=np.float32)
         main = spaces.Box(-bound, bound, dtype=np.float32)

@@ -4,6 +4,9 @@ an open or close of its gripper.
 
 Deltas are added to the previous *target*, not to the measured state, so that a zero
 action keeps the arm going where it was sent; at reset the targets are where the arm is.
+A ``tool_servo`` action is the exception: it moves tool0 from where it *is* (measured),
+its orientation held at the episode's start, so the target never runs ahead of the arm
+by more than one action and a zero action stops the arm where it is.
 A target the arm would refuse (a tool pose no configuration reaches, a motion that would
 overshoot a joint limit, an arm in protective stop) is not sent: the previous target
 stays, and :meth:`ArmCommander.apply` returns why.
@@ -75,6 +78,13 @@ class ArmCommander:
             target = np.clip(value, self._lower, self._upper)
         elif self._kind is ActionKind.JOINT_DELTAS:
             target = np.clip(self._target + value, self._lower, self._upper)
+        elif self._kind is ActionKind.TOOL_SERVO:
+            tool_target = self._tool_target.copy()  # the start's orientation
+            tool_target[:3, 3] = self._world.tf.world_pose(arm.description.tool0)[:3, 3] + value
+            try:
+                target = arm.solve_ik(tool_target, seed=arm.positions)
+            except UnreachablePose as exc:
+                return str(exc)
         else:
             if not value.any():
                 return ""  # keep the motion there is (no IK needed)

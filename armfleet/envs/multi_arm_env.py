@@ -31,6 +31,7 @@ from armfleet.envs.errors import EnvNotReset, InvalidOption
 from armfleet.envs.flat_spaces import FlatSpaces
 from armfleet.envs.observations import ArmObserver
 from armfleet.envs.rendering import DEFAULT_SIZE, RenderMode, check_size, render_rgb
+from armfleet.envs.servo_controller import servo_spec
 from armfleet.envs.stop_messages import StopMessages
 from armfleet.envs.stop_penalty import stop_penalty_for
 from armfleet.envs.stop_policy import StopPolicy
@@ -63,8 +64,9 @@ class MultiArmEnv(gym.Env[Observation, Action]):
         task: what the arms are to do (:class:`~armfleet.envs.tasks.ReachTask`, ...),
             or a launch spec (a :class:`~armfleet.FleetSpec`, a path, or a shipped
             spec's name) for its scene with no reward (:class:`SceneTask`).
-        action_kind: ``"joint_positions"``, ``"joint_deltas"`` or ``"tool_delta"``
-            (:class:`~armfleet.envs.actions.ActionKind`).
+        action_kind: ``"joint_positions"``, ``"joint_deltas"``, ``"tool_delta"`` or
+            ``"tool_servo"`` (:class:`~armfleet.envs.actions.ActionKind`; ``tool_servo``
+            gives the arms a responsive controller: :mod:`armfleet.envs.servo_controller`).
         control_period: physics steps per environment step, in [1, 10000].
         on_stop: ``"terminate"`` or ``"reset"``: what a protective stop or an arm fault
             does (:class:`~armfleet.envs.stop_policy.StopPolicy`).
@@ -124,6 +126,8 @@ class MultiArmEnv(gym.Env[Observation, Action]):
             raise InvalidOption("flat", flat, "True or False")
         self._elapsed_steps = 0
         spec = task.spec()
+        if self._kind is ActionKind.TOOL_SERVO:  # arms that follow a command at once
+            spec = servo_spec(spec)
         self._spec = dataclasses.replace(
             spec, world=dataclasses.replace(spec.world, viewer=mode is RenderMode.HUMAN)
         )

@@ -11,7 +11,7 @@ from armfleet.envs.actions import ActionKind
 from armfleet.envs.multi_arm_env import MultiArmEnv
 from armfleet.envs.registration import HANDOVER_MAX_STEPS, REACH_MAX_STEPS, SCENE_MAX_STEPS
 from armfleet.envs.tasks.handover_task import HandoverTask, RewardKind
-from armfleet.envs.tasks.reach_task import SUCCESS_BONUS, ReachTask
+from armfleet.envs.tasks.reach_task import SUCCESS_BONUS, ReachTask, TargetRegion
 from armfleet.envs.tasks.task import SceneTask
 from armfleet.scenarios.handover import TOLERANCE_M
 from armfleet.scenarios.reach import MODEL
@@ -24,8 +24,9 @@ class ReachEnv(MultiArmEnv):
     default.
 
     Args:
-        arm_count, spacing_m, tolerance_m, model, success_bonus: of the task
-            (``model``: a shipped model, one's own by name, or a model file).
+        arm_count, spacing_m, tolerance_m, model, success_bonus, target_region: of the
+            task (``model``: a shipped model, one's own by name, or a model file;
+            ``target_region``: ``"workspace"`` or ``"near"``).
         **options: of :class:`MultiArmEnv`.
     """
 
@@ -36,13 +37,15 @@ class ReachEnv(MultiArmEnv):
         tolerance_m: float = 0.02,
         model: str | os.PathLike[str] = MODEL,
         success_bonus: float = SUCCESS_BONUS,
+        target_region: TargetRegion | str = TargetRegion.WORKSPACE,
         **options: Any,
     ) -> None:
         options.setdefault("action_kind", ActionKind.JOINT_DELTAS)
         options.setdefault("max_episode_steps", REACH_MAX_STEPS)
         task = ReachTask(
-            arm_count, spacing_m, tolerance_m, model=model, success_bonus=success_bonus
-        )
+            arm_count, spacing_m, tolerance_m, model=model, success_bonus=success_bonus,
+            target_region=target_region,
+        )  # fmt: skip
         super().__init__(task, **options)
 
 

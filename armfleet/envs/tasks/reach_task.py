@@ -2,9 +2,17 @@
 
 The scene is the Reach sweep's (:mod:`armfleet.scenarios.reach`): ``arm_count``
 Pandas ``arm0``, ``arm1``, ... along x, ``spacing_m`` apart, facing +y. At reset each arm
-gets one target drawn with the episode's generator
-(:func:`~armfleet.scenarios.reach_targets.draw_row_targets`: the tool0 pose of a
-random joint configuration clear of the limits, the floor and the arm itself).
+gets one target drawn with the episode's generator, in its ``target_region``
+(:class:`TargetRegion`): ``"workspace"`` (default), the tool0 pose of a random joint
+configuration clear of the limits, the floor and the arm itself
+(:func:`~armfleet.scenarios.reach_targets.draw_row_targets`; 0.22-1.08 m from tool0's
+start); ``"near"``, a position drawn uniformly in a cube of side :data:`NEAR_CUBE_M`
+(0.3 m) centred on tool0's start, at least ``min_tool_height_m`` high, with tool0's start
+orientation (as panda-gym's PandaReach: its goals lie in a 0.3 m cube in front of the
+gripper).
+Each arm observes its ``target_pose`` and ``target_offset``: the target's position less
+tool0's, along the world axes [m] (what the reward measures, and what a policy moves
+along).
 Reward, every step: minus the sum over arms of tool0's distance to its target's position
 [m], each capped at :data:`DISTANCE_CAP_M` (so that a step's reward is bounded), plus
 ``success_bonus`` in the step that succeeds: once every tool0 is within ``tolerance_m``
@@ -16,6 +24,7 @@ file (docs/own-robot.md), all its joints driven as a Panda's.
 
 from __future__ import annotations
 
+import enum
 import os
 import weakref
 from pathlib import Path
@@ -25,8 +34,9 @@ from gymnasium import spaces
 
 from armfleet.checks.model_reference import is_model_file
 from armfleet.checks.real_numbers import real_number
+from armfleet.envs.choices import choose
 from armfleet.envs.errors import InvalidOption
-from armfleet.envs.observations import pose_space
+from armfleet.envs.observations import WORKSPACE_M, pose_space
 from armfleet.envs.poses import pose_vector
 from armfleet.envs.tasks.task import Evaluation, Task
 from armfleet.frames.spawn_pose import SpawnPose
@@ -44,6 +54,20 @@ MAX_ARMS = 8
 DISTANCE_CAP_M = 2.0
 #: Added to the reward in the step that succeeds.
 SUCCESS_BONUS = 1.0
+#: Side of the cube ``"near"`` targets are drawn in, centred on tool0's start [m].
+NEAR_CUBE_M = 0.3
+
+
+class TargetRegion(enum.Enum):
+    """Where Reach draws its targets (see the module docstring)."""
+
+    WORKSPACE = "workspace"
+    NEAR = "near"
+
+    @classmethod
+    def parse(cls, value: object) -> TargetRegion:
+        """``value`` as a region (the enum or its name); InvalidOption lists them."""
+        return choose(cls, value, "target_region")
 
 
 class ReachTask(Task):
@@ -60,6 +84,7 @@ class ReachTask(Task):
             the same file) or ``package://`` URI. An unknown model or a bad file is refused
             when the environment is made.
         success_bonus: added to the reward in the step that succeeds, in [0, 100].
+        target_region: ``"workspace"`` or ``"near"`` (:class:`TargetRegion`).
     """
 
     uses_gripper = False
@@ -73,6 +98,7 @@ class ReachTask(Task):
         min_tool_height_m: float = 0.1,
         model: str | os.PathLike[str] = MODEL,
         success_bonus: float = SUCCESS_BONUS,
+        target_region: TargetRegion | str = TargetRegion.WORKSPACE,
     ) -> None:
         if isinstance(arm_count, bool) or not isinstance(arm_count, int | np.integer):
             raise InvalidOption("arm_count", arm_count, f"a whole number in [1, {MAX_ARMS}]")
@@ -88,6 +114,7 @@ class ReachTask(Task):
         self.success_bonus = real_number(
             success_bonus, "success_bonus", "a number in [0, 100]", low=0.0, high=100.0
         )
+        self.target_region = TargetRegion.parse(target_region)
         self.limit_margin = limit_margin
         self.min_tool_height_m = min_tool_height_m
         self.arms = tuple(f"arm{i}" for i in range(self.arm_count))
@@ -114,6 +141,9 @@ class ReachTask(Task):
 
     def reset(self, world: World, rng: np.random.Generator) -> None:
         arms = [world.arm(name) for name in self.arms]
+        if self.target_region is TargetRegion.NEAR:
+            self._targets = {arm.name: self._near_target(world, arm.name, rng) for arm in arms}
+            return
         if self._probe is None:  # one for every episode: making one costs ~20 ms
             self._probe = ClearanceProbe(arms[0])
             weakref.finalize(self, self._probe.close)
@@ -123,13 +153,28 @@ class ReachTask(Task):
         )  # fmt: skip
         self._targets = {name: targets[0].pose for name, targets in drawn.items()}
 
+    def _near_target(self, world: World, arm: str, rng: np.random.Generator) -> FloatArray:
+        """A ``"near"`` target of ``arm``: tool0's start pose moved within the cube."""
+        target = world.tf.world_pose(world.arm(arm).description.tool0).copy()
+        target[:3, 3] += rng.uniform(-NEAR_CUBE_M / 2, NEAR_CUBE_M / 2, 3)
+        target[2, 3] = max(target[2, 3], self.min_tool_height_m)
+        return target
+
     def arm_spaces(self, arm: str) -> dict[str, spaces.Box]:
         del arm
-        return {"target_pose": pose_space()}
+        bound = np.float32(2 * WORKSPACE_M)
+        return {
+            "target_pose": pose_space(),
+            "target_offset": spaces.Box(-bound, bound, (3,), dtype=np.float32),
+        }
 
     def observe(self, world: World, arm: str) -> dict[str, FloatArray]:
-        del world
-        return {"target_pose": pose_vector(self._targets[arm])}
+        target = self._targets[arm]
+        tool = world.tf.world_pose(world.arm(arm).description.tool0)
+        return {
+            "target_pose": pose_vector(target),
+            "target_offset": target[:3, 3] - tool[:3, 3],
+        }
 
     def distances(self, world: World) -> dict[str, float]:
         """Each arm's tool0 distance to its target's position [m]."""
