@@ -40,6 +40,7 @@ PAGES = (
     "sweeps.md",
     "foxglove.md",
     "envs.md",
+    "ros2.md",
 )
 #: Pages whose ``python`` blocks need more than this file gives them, and who runs them.
 RUN_ELSEWHERE = {
@@ -47,6 +48,8 @@ RUN_ELSEWHERE = {
     "live-api.md": "tests/test_remote_session.py::test_the_live_api_example_runs_as_written",
     # Each block is a script of its own (a vector env's workers import it), training shortened.
     "envs.md": "tests/test_docs_envs_snippets.py::test_the_snippet_runs_as_a_script",
+    # Its node talks to a world served to ROS 2 in another process.
+    "ros2.md": "tests/test_docs_ros2.py::test_the_world_command_and_the_node_work_as_written",
 }
 #: Longest README: the short path fits a couple of screens (it was 610 lines).
 MAX_README_LINES = 150
