@@ -42,7 +42,7 @@ MODES = ("off", "on", "subscribed")
 DOMAIN = 199
 
 SUBSCRIBER = """
-import sys, time, rclpy
+import sys, threading, rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -57,12 +57,11 @@ node.create_subscription(TFMessage, "/tf", got, 100)
 for arm in arms:
     node.create_subscription(JointState, f"/{arm}/joint_states", got, 10)
 executor = SingleThreadedExecutor(context=ctx); executor.add_node(node)
+done = threading.Event()
+threading.Thread(target=lambda: (sys.stdin.read(), done.set()), daemon=True).start()
 print("subscribed", flush=True)
-try:
-    while True:
-        executor.spin_once(timeout_sec=0.1)
-except KeyboardInterrupt:
-    pass
+while not done.is_set():  # until the benchmark closes our stdin
+    executor.spin_once(timeout_sec=0.1)
 print(count[0], flush=True)
 """
 
@@ -82,6 +81,7 @@ def _chunk(world: armfleet.World, rng: np.random.Generator, sim_s: float) -> tup
 def _subscriber(arms: list[str]) -> subprocess.Popen[str]:
     process = subprocess.Popen(
         [sys.executable, "-c", SUBSCRIBER, str(DOMAIN), *arms],
+        stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
         env=os.environ | loopback_environment(),
@@ -110,8 +110,7 @@ def measure(arms: int, chunk_s: float, repeats: int) -> dict[str, Any]:
                 try:
                     samples["subscribed"].append(_chunk(world, rng, chunk_s))
                 finally:
-                    node.send_signal(2)
-                    out, _ = node.communicate(timeout=60)
+                    out, _ = node.communicate(input="", timeout=60)
                     received.append(int(out.split()[-1]))
             finally:
                 server.close()
