@@ -23,6 +23,7 @@ import argparse
 import json
 import os
 import platform
+import select
 import statistics
 import subprocess
 import sys
@@ -51,11 +52,19 @@ arms = sys.argv[2:]
 ctx = rclpy.Context(); rclpy.init(context=ctx, domain_id=int(sys.argv[1]))
 node = rclpy.create_node("benchmark_subscriber", context=ctx)
 count = [0]
-def got(_message): count[0] += 1
-node.create_subscription(Clock, "/clock", got, 10)
-node.create_subscription(TFMessage, "/tf", got, 100)
+heard = set()
+def listen(topic):
+    def got(_message):
+        count[0] += 1
+        if topic not in heard:
+            heard.add(topic)
+            if len(heard) == 2 + len(arms):
+                print("receiving", flush=True)
+    return got
+node.create_subscription(Clock, "/clock", listen("/clock"), 10)
+node.create_subscription(TFMessage, "/tf", listen("/tf"), 100)
 for arm in arms:
-    node.create_subscription(JointState, f"/{arm}/joint_states", got, 10)
+    node.create_subscription(JointState, f"/{arm}/joint_states", listen(arm), 10)
 executor = SingleThreadedExecutor(context=ctx); executor.add_node(node)
 done = threading.Event()
 threading.Thread(target=lambda: (sys.stdin.read(), done.set()), daemon=True).start()
@@ -91,6 +100,17 @@ def _subscriber(arms: list[str]) -> subprocess.Popen[str]:
     return process
 
 
+def _until_receiving(world: armfleet.World, node: subprocess.Popen[str]) -> None:
+    """Step the world at the wall clock until the node hears every topic (discovery)."""
+    assert node.stdout is not None
+    deadline = time.monotonic() + 120.0
+    while not select.select([node.stdout], [], [], 0)[0]:
+        if time.monotonic() > deadline:
+            raise RuntimeError("the subscriber heard nothing in 120 s")
+        world.run(0.05, realtime=True)
+    assert node.stdout.readline().strip() == "receiving"
+
+
 def measure(arms: int, chunk_s: float, repeats: int) -> dict[str, Any]:
     rng = np.random.default_rng(arms)
     world = armfleet.World()
@@ -106,8 +126,8 @@ def measure(arms: int, chunk_s: float, repeats: int) -> dict[str, Any]:
             try:
                 samples["on"].append(_chunk(world, rng, chunk_s))
                 node = _subscriber(names)
-                world.run(1.0, realtime=True)  # discovery: the node sees the topics
                 try:
+                    _until_receiving(world, node)
                     samples["subscribed"].append(_chunk(world, rng, chunk_s))
                 finally:
                     out, _ = node.communicate(input="", timeout=60)

@@ -36,6 +36,7 @@ from armfleet.checks.number_ranges import ROS_DOMAIN_ID, ROS_RATE_HZ
 from armfleet.errors import ArmfleetError
 from armfleet.ros import conversions
 from armfleet.ros.cdr import JointStateLayout, TfLayout
+from armfleet.ros.demand_stream import DemandStream
 from armfleet.ros.errors import RosError
 from armfleet.ros.forward_command import ForwardCommand
 from armfleet.ros.gripper_action import GripperAction
@@ -82,6 +83,7 @@ class _ArmInterfaces:
     trajectory: TrajectoryAction
     forward: ForwardCommand
     gripper: GripperAction | None
+    joint_stream: DemandStream
     watches: list[Subscription]
 
 
@@ -137,10 +139,8 @@ class RosServer:
         self._arms: dict[str, _ArmInterfaces] = {}
         self._tf_layouts: dict[tuple[tuple[str, str], ...], TfLayout] = {}
         self._next_clock = 0.0
-        self._watches = [
-            world.bus.subscribe(topics.TF, self._on_tf, period_s=self._period),
-            world.bus.subscribe(topics.COLLISIONS, self._on_collisions),
-        ]
+        self._tf_stream = DemandStream(world.bus, topics.TF, self._tf, self._tf_bytes, self._period)
+        self._watches = [world.bus.subscribe(topics.COLLISIONS, self._on_collisions)]
         self._executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS, context=self._context)
         self._executor.add_node(self._node)
         self._spinner = threading.Thread(
@@ -187,6 +187,7 @@ class RosServer:
             self._remove_arm(name, "the ROS 2 interface closed")
         for watch in self._watches:
             watch.cancel()
+        self._tf_stream.close()
         self._executor.shutdown(timeout_sec=STOP_WAIT_S)
         self._spinner.join(STOP_WAIT_S)
         self._node.destroy_node()
@@ -208,6 +209,9 @@ class RosServer:
         if now + 1e-12 >= self._next_clock:
             self._next_clock = now + self._period
             self._clock.publish(Clock(clock=conversions.ros_time(now)))
+            self._tf_stream.refresh()  # streams start and stop with their subscribers
+            for interfaces in self._arms.values():
+                interfaces.joint_stream.refresh()
         for interfaces in self._arms.values():
             if interfaces.trajectory.busy:
                 interfaces.trajectory.on_step(now)
@@ -217,24 +221,20 @@ class RosServer:
         controller = TrajectoryController(arm)
         joint_states = node.create_publisher(JointState, f"/{name}/joint_states", _STREAM)
         description = node.create_publisher(String, f"/{name}/robot_description", _LATCHED)
+        layout = JointStateLayout(arm.joint_state.name)
         interfaces = _ArmInterfaces(
             joint_states,
             description,
             TrajectoryAction(node, self._world, controller, self._period),
             ForwardCommand(node, self._world, arm, self._group),
             GripperAction(node, self._world, arm, self._group) if arm.has_gripper else None,
-            [],
+            DemandStream(
+                bus, topics.joint_states(name), joint_states, layout.serialize, self._period
+            ),
+            [bus.subscribe(topics.status(name), self._on_status)],
         )
         self._arms[name] = interfaces
-        layout = JointStateLayout(arm.joint_state.name)
-        interfaces.watches += [
-            bus.subscribe(
-                topics.joint_states(name),
-                lambda state: joint_states.publish(layout.serialize(state)),
-                period_s=self._period,
-            ),
-            bus.subscribe(topics.status(name), self._on_status),
-        ]
+        interfaces.joint_stream.refresh()
         description.publish(String(data=arm.description.urdf))
         self._publish_static()
 
@@ -244,6 +244,7 @@ class RosServer:
             return
         for watch in interfaces.watches:
             watch.cancel()
+        interfaces.joint_stream.close()
         interfaces.trajectory.close_goals(reason)
         interfaces.trajectory.close()
         interfaces.forward.close()
@@ -261,12 +262,12 @@ class RosServer:
         ]
         self._tf_static.publish(conversions.tf_message(static))
 
-    def _on_tf(self, message: TFMessage) -> None:
+    def _tf_bytes(self, message: TFMessage) -> bytes:
         frames = tuple((t.frame_id, t.child_frame_id) for t in message.transforms)
         layout = self._tf_layouts.get(frames)
         if layout is None:
             layout = self._tf_layouts[frames] = TfLayout(frames)
-        self._tf.publish(layout.serialize(message))
+        return layout.serialize(message)
 
     def _on_status(self, status: ArmStatus) -> None:
         self._diagnostics.publish(diagnostics(status))
