@@ -12,6 +12,8 @@ Commands (JSON holds their arguments):
 - ``publish``: ``{"arm", "trajectory"}``: one message on the joint_trajectory topic;
 - ``forward``: ``{"arm", "values"}``: one message on forward_position_controller/commands;
 - ``gripper``: ``{"arm", "position", "max_effort"}``: a GripperCommand goal;
+- ``monitor``: ``{"arm", "level"}``: ``/diagnostics`` and ``/collisions`` until the arm's
+  status reaches ``level`` (0 OK, 1 WARN, 2 ERROR): its statuses and the contacts seen;
 - ``graph``: ``{"arm", "topics"}``: each topic's publishers as ``ros2 topic info
   --verbose`` shows them: node, type and type hash.
 
@@ -31,6 +33,7 @@ import rclpy
 from builtin_interfaces.msg import Duration, Time
 from control_msgs.action import FollowJointTrajectory, GripperCommand
 from control_msgs.msg import JointTolerance
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.action.client import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -39,6 +42,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from visualization_msgs.msg import Marker, MarkerArray
 
 #: Longest wait for the world to be discovered or a goal to end [s].
 WAIT_S = 60.0
@@ -241,6 +245,34 @@ def graph(client: Client, topics: list[str]) -> dict[str, Any]:
     }
 
 
+def monitor(client: Client, arm: str, level: int) -> dict[str, Any]:
+    statuses: list[Any] = []
+    contacts: set[str] = set()
+
+    def on_diagnostics(message: DiagnosticArray) -> None:
+        statuses.extend(s for s in message.status if s.hardware_id == arm)
+
+    def on_markers(message: MarkerArray) -> None:
+        contacts.update(m.text for m in message.markers if m.action == Marker.ADD)
+
+    client.node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
+    client.node.create_subscription(MarkerArray, "/collisions", on_markers, 50)
+    print("listening", flush=True)
+    client.spin_until(lambda: any(int.from_bytes(s.level, "little") >= level for s in statuses))
+    return {
+        "statuses": [
+            {
+                "level": int.from_bytes(s.level, "little"),
+                "name": s.name,
+                "message": s.message,
+                "values": {kv.key: kv.value for kv in s.values},
+            }
+            for s in statuses
+        ],
+        "contacts": sorted(contacts),
+    }
+
+
 def _hash_text(hashed: Any) -> str:
     """A type hash as ROS 2's tools print it: ``RIHS01_<hex>``."""
     return f"RIHS{hashed.version:02d}_{hashed.value.hex()}"
@@ -264,6 +296,8 @@ def main() -> None:
             out = publish(client, topic, Float64MultiArray, message)
         elif command == "gripper":
             out = gripper(client, arm, arguments["position"], arguments["max_effort"])
+        elif command == "monitor":
+            out = monitor(client, arm, int(arguments["level"]))
         elif command == "graph":
             out = graph(client, arguments["topics"])
         else:

@@ -108,8 +108,10 @@ DEFAULT_FOXGLOVE_RATE_HZ = 100.0
 #: x = 1e308 m cut a shared world's real-time factor from 1.00 to about 0.2.
 #: A ROS 2 domain id (Fast DDS on Linux: 0..232).
 ROS_DOMAIN_ID = NumberRange(0, 232, "a ROS domain id", integer=True)
-#: Instants of the ROS 2 topics per simulated second.
+#: Instants of the ROS 2 topics per simulated second, and its default (a controller
+#: manager's usual update rate).
 ROS_RATE_HZ = NumberRange(0.1, 1000.0, "a rate in Hz of simulated time")
+DEFAULT_ROS_RATE_HZ = 100.0
 WORLD_COORDINATE_M = NumberRange(-1000.0, 1000.0, "metres")
 #: An angle of a pose given in degrees (roll, pitch, yaw) [deg].
 ANGLE_DEG = NumberRange(-360.0, 360.0, "degrees")

@@ -32,7 +32,7 @@ from tf2_msgs.msg import TFMessage as RosTFMessage
 from visualization_msgs.msg import MarkerArray
 
 from armfleet import topics
-from armfleet.checks.number_ranges import ROS_DOMAIN_ID, ROS_RATE_HZ
+from armfleet.checks.number_ranges import DEFAULT_ROS_RATE_HZ, ROS_DOMAIN_ID, ROS_RATE_HZ
 from armfleet.errors import ArmfleetError
 from armfleet.ros import conversions
 from armfleet.ros.cdr import JointStateLayout, TfLayout
@@ -59,9 +59,8 @@ logger = logging.getLogger("armfleet")
 
 #: The node's name.
 NODE_NAME = "armfleet"
-#: Instants of the streamed topics per simulated second by default (a controller
-#: manager's usual update rate).
-DEFAULT_RATE_HZ = 100.0
+#: Instants of the streamed topics per simulated second by default.
+DEFAULT_RATE_HZ = DEFAULT_ROS_RATE_HZ
 #: Executor threads: goals wait in them while their arm moves.
 EXECUTOR_THREADS = 64
 #: How long closing waits for the executor's threads [s].

@@ -23,7 +23,12 @@ from armfleet.arms.arm_assembly import (
 from armfleet.arms.arm_driver import ArmDriver
 from armfleet.checks.flags import flag
 from armfleet.checks.names import check_arm_name
-from armfleet.checks.number_ranges import DEFAULT_FOXGLOVE_RATE_HZ, PORT, RUN_DURATION_S
+from armfleet.checks.number_ranges import (
+    DEFAULT_FOXGLOVE_RATE_HZ,
+    DEFAULT_ROS_RATE_HZ,
+    PORT,
+    RUN_DURATION_S,
+)
 from armfleet.checks.real_numbers import real_number
 from armfleet.checks.time_step import check_dt
 from armfleet.controllers.fleet_update import FleetUpdate
@@ -302,7 +307,7 @@ class World:
         domain_id: int | None = None,
         *,
         localhost_only: bool = True,
-        rate_hz: float = 100.0,
+        rate_hz: float = DEFAULT_ROS_RATE_HZ,
     ) -> Any:
         """Serve this world to ROS 2 nodes (docs/ros2.md): ``/clock``, ``/tf``,
         ``/tf_static`` and each arm's ros2_control interfaces (joint states, robot
