@@ -32,6 +32,7 @@ SLOW_FILES = {
     "test_ros_loopback.py": 15,
     "test_ros_topics.py": 10,
     "test_ros_status.py": 10,
+    "test_ros_arms_coming_and_going.py": 15,
     "test_docs_envs_snippets.py": 45,
     "test_envs_sb3.py": 15,
     "test_envs_flat.py": 12,

@@ -13,7 +13,8 @@ Commands (JSON holds their arguments):
 - ``forward``: ``{"arm", "values"}``: one message on forward_position_controller/commands;
 - ``gripper``: ``{"arm", "position", "max_effort"}``: a GripperCommand goal;
 - ``monitor``: ``{"arm", "level"}``: ``/diagnostics`` and ``/collisions`` until the arm's
-  status reaches ``level`` (0 OK, 1 WARN, 2 ERROR): its statuses and the contacts seen;
+  status reaches ``level`` (0 OK, 1 WARN, 2 ERROR): its statuses and the contacts seen
+  (it prints ``listening`` once the arm's first status arrived);
 - ``graph``: ``{"arm", "topics"}``: each topic's publishers as ``ros2 topic info
   --verbose`` shows them: node, type and type hash.
 
@@ -257,6 +258,7 @@ def monitor(client: Client, arm: str, level: int) -> dict[str, Any]:
 
     client.node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
     client.node.create_subscription(MarkerArray, "/collisions", on_markers, 50)
+    client.spin_until(lambda: bool(statuses))  # discovered: the arm's statuses arrive
     print("listening", flush=True)
     client.spin_until(lambda: any(int.from_bytes(s.level, "little") >= level for s in statuses))
     return {

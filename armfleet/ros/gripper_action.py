@@ -19,6 +19,7 @@ from rclpy.action.server import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import CallbackGroup
 
 from armfleet.errors import ArmfleetError
+from armfleet.ros.deferred_close import GoalCount, close_when_idle
 
 if TYPE_CHECKING:
     from rclpy.action.server import ServerGoalHandle
@@ -41,20 +42,30 @@ class GripperAction:
     def __init__(self, node: Node, world: World, arm: Arm, group: CallbackGroup) -> None:
         self._world = world
         self._arm = arm
+        self._goals = GoalCount()
+        self._closing = False
         self._server = ActionServer(
             node,
             GripperCommand,
             f"/{arm.name}/gripper_controller/gripper_cmd",
             execute_callback=self._execute,
-            goal_callback=lambda _request: GoalResponse.ACCEPT,
+            goal_callback=lambda _request: (
+                GoalResponse.REJECT if self._closing else GoalResponse.ACCEPT
+            ),
             cancel_callback=lambda _handle: CancelResponse.ACCEPT,
             callback_group=group,
         )
 
-    def close(self) -> None:
-        self._server.destroy()
+    def close(self) -> threading.Thread:
+        """Take the action server down once its goals returned (new ones are refused)."""
+        self._closing = True
+        return close_when_idle(self._goals, self._server.destroy)
 
     def _execute(self, handle: ServerGoalHandle[Any, Any, Any]) -> Any:
+        with self._goals:
+            return self._run(handle)
+
+    def _run(self, handle: ServerGoalHandle[Any, Any, Any]) -> Any:
         command = handle.request.command
         gripper = self._arm.gripper
         target = float(command.position)

@@ -136,6 +136,8 @@ class RosServer:
         self._diagnostics = self._node.create_publisher(DiagnosticArray, "/diagnostics", _STREAM)
         self._collisions = self._node.create_publisher(MarkerArray, "/collisions", _STREAM)
         self._arms: dict[str, _ArmInterfaces] = {}
+        #: Threads taking action servers down once their goals returned (deferred_close).
+        self._retiring: list[threading.Thread] = []
         self._tf_layouts: dict[tuple[tuple[str, str], ...], TfLayout] = {}
         self._next_clock = 0.0
         self._tf_stream = DemandStream(world.bus, topics.TF, self._tf, self._tf_bytes, self._period)
@@ -187,6 +189,8 @@ class RosServer:
         for watch in self._watches:
             watch.cancel()
         self._tf_stream.close()
+        for thread in self._retiring:  # the goals' results go out before the node goes
+            thread.join(STOP_WAIT_S)
         self._executor.shutdown(timeout_sec=STOP_WAIT_S)
         self._spinner.join(STOP_WAIT_S)
         self._node.destroy_node()
@@ -245,10 +249,11 @@ class RosServer:
             watch.cancel()
         interfaces.joint_stream.close()
         interfaces.trajectory.close_goals(reason)
-        interfaces.trajectory.close()
+        self._retiring = [thread for thread in self._retiring if thread.is_alive()]
+        self._retiring.append(interfaces.trajectory.close())
         interfaces.forward.close()
         if interfaces.gripper is not None:
-            interfaces.gripper.close()
+            self._retiring.append(interfaces.gripper.close())
         self._node.destroy_publisher(interfaces.joint_states)
         self._node.destroy_publisher(interfaces.description)
         self._publish_static()

@@ -22,6 +22,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from armfleet.errors import ArmfleetError
 from armfleet.ros.conversions import ros_time
+from armfleet.ros.deferred_close import GoalCount, close_when_idle
 from armfleet.ros.trajectory_controller import ActiveTrajectory, TrajectoryController
 from armfleet.ros.trajectory_goal import GoalRefused, GoalResult, Outcome
 
@@ -66,6 +67,8 @@ class TrajectoryAction:
         self._period_s = period_s
         self._next_feedback = 0.0
         self._handles: dict[int, ServerGoalHandle[Any, Any, Any]] = {}
+        self._goals = GoalCount()
+        self._closing = False
         arm = controller.arm.name
         base = controller_namespace(arm)
         self._group = ReentrantCallbackGroup()
@@ -74,7 +77,7 @@ class TrajectoryAction:
             FollowJointTrajectory,
             f"{base}/follow_joint_trajectory",
             execute_callback=self._execute,
-            goal_callback=lambda _request: GoalResponse.ACCEPT,
+            goal_callback=self._on_goal,
             cancel_callback=lambda _handle: CancelResponse.ACCEPT,
             callback_group=self._group,
         )
@@ -87,9 +90,12 @@ class TrajectoryAction:
         """End the trajectory followed, aborted with ``reason`` (stepping thread)."""
         self._controller.close(reason)
 
-    def close(self) -> None:
+    def close(self) -> threading.Thread:
+        """Take the topic down now and the action server once its goals returned (new
+        goals are refused meanwhile)."""
+        self._closing = True
         self._node.destroy_subscription(self._topic)
-        self._server.destroy()
+        return close_when_idle(self._goals, self._server.destroy)
 
     # -- stepping thread --------------------------------------------------------------
     @property
@@ -123,7 +129,14 @@ class TrajectoryAction:
         handle.publish_feedback(feedback)
 
     # -- executor threads -------------------------------------------------------------
+    def _on_goal(self, _request: Any) -> GoalResponse:
+        return GoalResponse.REJECT if self._closing else GoalResponse.ACCEPT
+
     def _execute(self, handle: ServerGoalHandle[Any, Any, Any]) -> Any:
+        with self._goals:
+            return self._run(handle)
+
+    def _run(self, handle: ServerGoalHandle[Any, Any, Any]) -> Any:
         goal = _Goal()
 
         def accept() -> None:
