@@ -24,7 +24,7 @@ from armfleet.errors import ArmfleetError
 from armfleet.ros.conversions import ros_time
 from armfleet.ros.deferred_close import GoalCount, close_when_idle
 from armfleet.ros.trajectory_controller import ActiveTrajectory, TrajectoryController
-from armfleet.ros.trajectory_goal import GoalRefused, GoalResult, Outcome
+from armfleet.ros.trajectory_goal import INVALID_GOAL, GoalRefused, GoalResult, Outcome
 
 if TYPE_CHECKING:
     from rclpy.action.server import ServerGoalHandle
@@ -152,11 +152,11 @@ class TrajectoryAction:
         try:
             self._world.submit(accept).result()
         except ArmfleetError as exc:  # the world closed
-            goal.finish(GoalResult(Outcome.ABORTED, -1, str(exc)))
+            goal.finish(GoalResult(Outcome.ABORTED, INVALID_GOAL, str(exc)))
         cancel_sent = False
         while not goal.finished.wait(POLL_S):
             if self._world.closed:
-                goal.finish(GoalResult(Outcome.ABORTED, -1, "the world closed"))
+                goal.finish(GoalResult(Outcome.ABORTED, INVALID_GOAL, "the world closed"))
             elif handle.is_cancel_requested and not cancel_sent:
                 cancel_sent = self._send_cancel(goal)
         if goal.entry is not None:
