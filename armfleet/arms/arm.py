@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import pinocchio as pin
@@ -45,7 +45,7 @@ from armfleet.messages import (
 from armfleet.motion.cartesian_path import LinearPathPlanner
 from armfleet.motion.move_options import DEFAULT_CLEARANCE_M, MoveOptions
 from armfleet.motion.pose_goal import PoseGoal
-from armfleet.motion.timed_trajectory import check_waypoints, sample_waypoints
+from armfleet.motion.timed_trajectory import Rows, Times, check_waypoints, sample_waypoints
 from armfleet.physics.arm_body import ArmBody
 from armfleet.runtime.bus import Bus
 from armfleet.runtime.lifetime import Lifetime, while_alive
@@ -462,10 +462,10 @@ class Arm:
     @while_alive
     def follow_trajectory(
         self,
-        times: Sequence[float],
-        positions: Sequence[Sequence[float]],
-        velocities: Sequence[Sequence[float]] | None = None,
-        accelerations: Sequence[Sequence[float]] | None = None,
+        times: Times,
+        positions: Rows,
+        velocities: Rows | None = None,
+        accelerations: Rows | None = None,
     ) -> float:
         """Follow timed waypoints from the present reference (replacing any motion), as
         joint_trajectory_controller does with a ``JointTrajectory``; returns at once.

@@ -28,6 +28,10 @@ from armfleet.controllers.jerk_limited_trajectory import SampledMotion
 from armfleet.errors import ArmfleetError
 from armfleet.messages import FloatArray
 
+#: Times of waypoints, and rows of per-joint values (lists or arrays).
+Times = Sequence[float] | FloatArray
+Rows = Sequence[Sequence[float]] | FloatArray
+
 #: Longest trajectory accepted [s]: a day of motion; longer is surely a unit mistake.
 MAX_DURATION_S = 86_400.0
 #: Most waypoints accepted in one trajectory.
@@ -67,10 +71,10 @@ class TimedWaypoints:
 def check_waypoints(
     arm: str,
     joints: int,
-    times: Sequence[float],
-    positions: Sequence[Sequence[float]],
-    velocities: Sequence[Sequence[float]] | None = None,
-    accelerations: Sequence[Sequence[float]] | None = None,
+    times: Times,
+    positions: Rows,
+    velocities: Rows | None = None,
+    accelerations: Rows | None = None,
 ) -> TimedWaypoints:
     """The waypoints as arrays, or :class:`TrajectoryRefused` naming the first problem.
 
@@ -201,14 +205,12 @@ def _quintic(
     return position, velocity, acceleration
 
 
-def _empty(values: Sequence[Sequence[float]]) -> bool:
+def _empty(values: Rows) -> bool:
     """No rows, or only empty ones (a ROS point leaves a field it does not give empty)."""
     return len(values) == 0 or all(len(row) == 0 for row in values)
 
 
-def _matrix(
-    arm: str, field: str, rows: Sequence[Sequence[float]], points: int, columns: int
-) -> FloatArray:
+def _matrix(arm: str, field: str, rows: Rows, points: int, columns: int) -> FloatArray:
     if len(rows) != points:
         raise TrajectoryRefused(arm, f"{len(rows)} rows of {field} for {points} points")
     for index, row in enumerate(rows):
