@@ -7,6 +7,7 @@ through the live API, not through ROS."""
 
 from __future__ import annotations
 
+import json
 import signal
 import time
 from collections.abc import Iterator
@@ -189,3 +190,29 @@ def test_a_node_killed_mid_goal_leaves_the_world_and_the_other_arm(served) -> No
             {"arm": "bob", "goals": [{"trajectory": _trajectory(BOB, start, (1.5, 0 * STEP))}]},
         )
         assert result["status"] == SUCCEEDED, result
+
+
+def test_a_goal_stamped_in_the_future_starts_then(served) -> None:
+    """joint_trajectory_controller starts a trajectory at its header stamp: before it the
+    arm holds, after it the arm follows and the goal succeeds."""
+    world, domain = served
+    with armfleet.connect(world.address) as client:
+        bob = client.arm("bob")
+        start = bob.positions
+        stamp = client.info().time_s + 6.0
+        trajectory = _trajectory(BOB, start, (1.0, STEP)) | {"stamp": stamp}
+        node = start_ros_node(domain, "goal", {"arm": "bob", "goals": [{"trajectory": trajectory}]})
+        try:
+            held = []
+            while client.info().time_s < stamp - 0.2:
+                held.append(np.abs(bob.positions - start).max())
+                time.sleep(0.1)
+            out, err = node.communicate(timeout=120)
+        finally:
+            if node.poll() is None:
+                node.kill()
+        assert node.returncode == 0, err[-2000:]
+        assert len(held) > 10 and max(held) < 1e-4  # it waited for its stamp
+        [result] = json.loads(out.strip().splitlines()[-1])
+        assert result["status"] == SUCCEEDED, result
+        np.testing.assert_allclose(bob.positions, start + STEP, atol=0.02)
