@@ -216,3 +216,35 @@ def test_a_goal_stamped_in_the_future_starts_then(served) -> None:
         [result] = json.loads(out.strip().splitlines()[-1])
         assert result["status"] == SUCCEEDED, result
         np.testing.assert_allclose(bob.positions, start + STEP, atol=0.02)
+
+
+def test_tolerances_out_of_reach_end_with_their_codes(served) -> None:
+    """A path tolerance tighter than the arm tracks stops it with PATH_TOLERANCE_VIOLATED;
+    a goal tolerance tighter than it holds ends GOAL_TOLERANCE_VIOLATED after
+    goal_time_tolerance."""
+    world, domain = served
+    with armfleet.connect(world.address) as client:
+        bob = client.arm("bob")
+        start = bob.positions
+        tight = [{"name": n, "position": 1e-12} for n in BOB]
+        results = ros_node(
+            domain,
+            "goal",
+            {
+                "arm": "bob",
+                "goals": [
+                    {"trajectory": _trajectory(BOB, start, (2.0, STEP)), "path_tolerance": tight},
+                    {
+                        "trajectory": _trajectory(BOB, start, (1.0, 0.2 * STEP)),
+                        "goal_tolerance": tight,
+                        "goal_time_tolerance": 0.2,
+                        "after": 3.0,
+                    },
+                ],
+            },
+        )
+        path, goal = results
+        assert path["status"] == ABORTED and path["error_code"] == -4, path
+        assert "left its path" in path["error_string"]
+        assert goal["status"] == ABORTED and goal["error_code"] == -5, goal
+        assert "from its goal" in goal["error_string"]
