@@ -2,11 +2,23 @@
 //
 // The server sends {type: "armfleet_status", text, serial} after every command sent
 // before it: while meshes are on their way the line names them, and an empty line
-// comes once they are all here. The page then hides the line and, once a frame with the
-// scene has been painted, answers "armfleet:shown:<serial>", which tells the server (e.g.
-// a replay waiting for a browser) that this page shows the scene. (Answering at once let
-// a loaded machine's replay start before the page had drawn its opening.)
+// comes once they are all here. The page then hides the line and, at the first frame it
+// draws after that, answers "armfleet:shown:<serial>", which tells the server (e.g. a
+// replay waiting for a browser) that this page shows the scene. (Drawing waits while
+// meshes arrive, armfleet-mesh-cache.js: answering at once, or a frame later, let a
+// loaded machine's replay start before the page had drawn its opening.)
 function armfleetLoadingLine(viewer, element) {
+  let awaited = null; // the serial to report at the next drawn frame
+  const draw = viewer.renderer.render.bind(viewer.renderer);
+  viewer.renderer.render = function (scene, camera) {
+    draw(scene, camera);
+    if (awaited === null) return;
+    const socket = viewer.connection;
+    if (socket && socket.readyState === WebSocket.OPEN) {
+      socket.send("armfleet:shown:" + awaited);
+    }
+    awaited = null;
+  };
   const handle = viewer.handle_command.bind(viewer);
   viewer.handle_command = function (command) {
     if (!command || command.type !== "armfleet_status") {
@@ -15,17 +27,7 @@ function armfleetLoadingLine(viewer, element) {
     }
     element.textContent = command.text;
     element.hidden = command.text === "";
-    if (command.text !== "") {
-      return;
-    }
-    // The first callback runs before the next paint, the second after it.
-    requestAnimationFrame(() =>
-      requestAnimationFrame(() => {
-        const socket = viewer.connection;
-        if (socket && socket.readyState === WebSocket.OPEN) {
-          socket.send("armfleet:shown:" + command.serial);
-        }
-      }),
-    );
+    awaited = command.text === "" ? command.serial : null;
+    if (awaited !== null) viewer.set_dirty(); // a frame comes even if nothing else changes
   };
 }
