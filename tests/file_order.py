@@ -29,7 +29,7 @@ SLOW_FILES = {
     "test_envs.py": 53,
     "test_ros_trajectories.py": 60,
     "test_ros_bad_messages.py": 20,
-    "test_ros_loopback.py": 35,
+    "test_ros_loopback.py": 7,
     "test_ros_topics.py": 10,
     "test_ros_status.py": 10,
     "test_ros_arms_coming_and_going.py": 15,

@@ -4,15 +4,18 @@ address it connects or sends to is a loopback one (no multicast, no other interf
 
 from __future__ import annotations
 
+import contextlib
 import ipaddress
+import os
 import re
 import shutil
+import signal
 import subprocess
 from pathlib import Path
 
 import pytest
 
-from tests.remote_world import ARMFLEET, runtime_env
+from tests.remote_world import ARMFLEET, registered_pid, runtime_env
 from tests.ros_world import ros_domain_id, ros_node
 
 #: Address fields strace prints for IPv4 and IPv6 socket addresses.
@@ -41,7 +44,7 @@ def test_every_socket_and_destination_of_the_world_is_on_the_loopback(tmp_path: 
     trace = tmp_path / "trace.txt"
     world = subprocess.Popen(
         [
-            "strace", "-f", "-qq", "-o", str(trace),
+            "strace", "-f", "--seccomp-bpf", "-qq", "-o", str(trace),
             "-e", "trace=bind,connect,sendto,sendmsg,sendmmsg",
             *ARMFLEET, "spawn", "bob", "--at", "0,0", "--no-viewer", "--realtime",
             "--ros", "--ros-domain", str(domain), "--duration", "30",
@@ -55,8 +58,14 @@ def test_every_socket_and_destination_of_the_world_is_on_the_loopback(tmp_path: 
         seen = ros_node(domain, "watch", {"arm": "bob", "seconds": 1.0})
         assert seen["joint_state_count"] > 10  # traffic really flowed
     finally:
-        world.terminate()
-        world.communicate(timeout=120)
+        # The world, not strace (which would leave it running to its --duration).
+        with contextlib.suppress(FileNotFoundError, ProcessLookupError):
+            os.kill(registered_pid(tmp_path), signal.SIGTERM)
+        try:
+            world.communicate(timeout=120)
+        except subprocess.TimeoutExpired:
+            world.kill()
+            world.communicate()
     found = _addresses(trace.read_text())
     assert found.get("bind"), "the trace shows no bound socket: strace saw nothing"
     for call, addresses in found.items():
